@@ -5,3 +5,32 @@
 //! crate's math façade), so an error in one is not silently copied into the other.
 
 pub mod reference;
+
+use std::path::PathBuf;
+
+/// The shared real-data folder (`shared/data`: maps, the Intel laser log, the sonar ring data).
+///
+/// Looked up as `$BEAMFIELD_DATA` if set, else as `shared/data` beside the repository (the
+/// layout of a developer machine and of CI), walking up from this crate's directory.
+///
+/// # Panics
+/// When the folder cannot be found: the tests that need real data must not pass silently
+/// without it.
+pub fn data_dir() -> PathBuf {
+    if let Some(p) = std::env::var_os("BEAMFIELD_DATA") {
+        return PathBuf::from(p);
+    }
+    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    loop {
+        let candidate = dir.join("shared").join("data");
+        if candidate.join("README.md").is_file() {
+            return candidate;
+        }
+        if !dir.pop() {
+            panic!(
+                "shared/data not found above {}; set BEAMFIELD_DATA",
+                env!("CARGO_MANIFEST_DIR")
+            );
+        }
+    }
+}

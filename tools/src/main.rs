@@ -1,0 +1,37 @@
+//! `beamfield`: the host command-line tool. Run `beamfield --help`.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Host tools for beamfield: build distance-field blobs from maps, read logs, score scans,
+/// fit and calibrate the sensor models that run on the microcontroller.
+#[derive(Parser)]
+#[command(name = "beamfield", version, about, long_about = None)]
+struct Cli {
+    /// Print machine-readable JSON instead of text.
+    #[arg(long, global = true)]
+    json: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print the tool's version and the crate's build configuration.
+    Info,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Info => {
+            let version = env!("CARGO_PKG_VERSION");
+            if cli.json {
+                println!("{}", serde_json::json!({ "version": version }));
+            } else {
+                println!("beamfield {version}");
+            }
+            ExitCode::SUCCESS
+        }
+    }
+}
