@@ -2,7 +2,7 @@
 //!
 //! Every other module goes through these functions, so the numerical backend is chosen in one
 //! place. The default backend is [`libm`] (a port of musl's libm). The `micromath` feature swaps
-//! in [`micromath`]'s approximations for `sin_cos` and `atan2` only: on a Cortex-M4F they cost
+//! in the `micromath` crate's approximations for `sin_cos` and `atan2` only: on a Cortex-M4F they cost
 //! about 20 instructions against about 1,578 for `libm::sinf` (whose argument reduction runs in
 //! soft-float f64), while micromath's `exp`, `ln` and `sqrt` are no faster than libm's and far
 //! less accurate (measured below), so those always come from libm, as do `erf`, `erfc` and

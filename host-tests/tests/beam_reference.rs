@@ -152,7 +152,7 @@ fn reading(zmax: f32) -> impl Strategy<Value = f32> {
         1 => (1.0f32..1.5).prop_map(move |u| u * zmax),
         1 => Just(f32::INFINITY),
         1 => Just(f32::NAN),
-        1 => (-5.0f32..-1e-6),
+        1 => -5.0f32..-1e-6,
     ]
 }
 
