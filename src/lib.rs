@@ -2,12 +2,20 @@
 #![cfg_attr(not(test), no_std)]
 
 pub mod beam;
+pub mod diagnostic;
 pub mod intrinsics;
 pub mod math;
+pub mod model;
 pub mod pose;
 pub mod scan;
+pub mod tempered;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
+pub use diagnostic::Lag1;
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
+pub use model::{SensorModel, Stride};
 pub use pose::{wrap_angle, Pose, SensorMount};
 pub use scan::{Beam, BeamLayout, Reading, Scan, ScanError, ScanScore};
+pub use tempered::{
+    effective_sample_size, normalize_log_weights, NormalizeError, Normalized, TemperError, Tempered,
+};
