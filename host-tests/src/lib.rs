@@ -34,3 +34,4 @@ pub fn data_dir() -> PathBuf {
         }
     }
 }
+pub mod corridor;
