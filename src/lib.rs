@@ -2,12 +2,18 @@
 #![cfg_attr(not(test), no_std)]
 
 pub mod beam;
+pub mod field;
 pub mod intrinsics;
 pub mod math;
 pub mod pose;
 pub mod scan;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
+pub use field::{
+    edt_scratch_len, emit_blob, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError,
+    EdtScratch, FieldHeader, FieldView, LikelihoodError, LikelihoodField, LikelihoodParam,
+    LikelihoodParams, DEFAULT_MAX_DIST_M, EDT_INFINITY,
+};
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
 pub use pose::{wrap_angle, Pose, SensorMount};
 pub use scan::{Beam, BeamLayout, Reading, Scan, ScanError, ScanScore};
