@@ -3,6 +3,7 @@
 
 pub mod beam;
 pub mod diagnostic;
+pub mod field;
 pub mod intrinsics;
 pub mod math;
 pub mod model;
@@ -12,6 +13,11 @@ pub mod tempered;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use diagnostic::Lag1;
+pub use field::{
+    edt_scratch_len, emit_blob, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError,
+    EdtScratch, FieldHeader, FieldView, LikelihoodError, LikelihoodField, LikelihoodParam,
+    LikelihoodParams, DEFAULT_MAX_DIST_M, EDT_INFINITY,
+};
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
 pub use model::{SensorModel, Stride};
 pub use pose::{wrap_angle, Pose, SensorMount};

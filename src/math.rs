@@ -128,6 +128,12 @@ pub fn normal_cdf(u: f32) -> f32 {
     }
 }
 
+/// Largest integer ≤ `x`, as f64 (libm).
+#[inline]
+pub fn floor_f64(x: f64) -> f64 {
+    libm::floor(x)
+}
+
 /// `e^x` in f64 (libm).
 #[inline]
 pub fn exp_f64(x: f64) -> f64 {

@@ -3,3 +3,6 @@
 //! `beamfield` crate; this crate reads maps and logs, and writes blobs, reports and pictures.
 pub mod calibrate;
 pub mod plot;
+
+pub mod field_cmd;
+pub mod map;

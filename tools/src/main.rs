@@ -19,6 +19,9 @@ struct Cli {
 enum Command {
     /// Print the tool's version and the crate's build configuration.
     Info,
+    /// Distance-field blobs for the likelihood field: build one from a ROS map, query it,
+    /// render it as a picture.
+    Field(beamfield_tools::field_cmd::FieldArgs),
 }
 
 fn main() -> ExitCode {
@@ -33,5 +36,12 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
+        Command::Field(args) => match beamfield_tools::field_cmd::run(args, cli.json) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("beamfield field: {e}");
+                ExitCode::FAILURE
+            }
+        },
     }
 }

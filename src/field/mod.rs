@@ -1,0 +1,27 @@
+//! The distance field: from an occupancy grid to a flash blob to the likelihood field
+//! (models.md §3 and §7, Thrun Table 6.3).
+//!
+//! - [`edt`]: the exact squared Euclidean distance transform (Felzenszwalb–Huttenlocher), on
+//!   caller-provided buffers.
+//! - [`blob`]: the versioned blob format; the writer ([`emit_blob`]) and the parser live
+//!   together and round-trip. Specified in `docs/blob-format.md`.
+//! - [`view`]: [`FieldView`], a validated zero-copy view of a blob, with infallible lookups.
+//! - [`likelihood`]: [`LikelihoodField`], the likelihood field model scored over a view.
+//!
+//! The host tool (`beamfield field build`) runs the transform on a map and writes the blob; the
+//! device links the blob and parses it once at boot.
+
+pub mod blob;
+pub mod edt;
+pub mod likelihood;
+pub mod view;
+
+pub use blob::{
+    emit_blob, emit_blob_from_squared_cells, BlobError, FieldHeader, BLOB_HEADER_LEN, BLOB_MAGIC,
+    BLOB_MAX_SIDE, BLOB_VERSION, CODE_MAX, DEFAULT_MAX_DIST_M, ENCODING_U8_LINEAR,
+};
+pub use edt::{edt_scratch_len, squared_edt, EdtError, EdtScratch, EDT_INFINITY, EDT_MAX_SIDE};
+pub use likelihood::{
+    LikelihoodError, LikelihoodField, LikelihoodParam, LikelihoodParams, LIKELIHOOD_TABLE_LEN,
+};
+pub use view::FieldView;

@@ -1,0 +1,218 @@
+//! [`FieldView`]: a validated, zero-copy view of a distance-field blob (in flash or anywhere).
+
+use super::blob::{parse_blob, BlobError, FieldHeader, CODE_MAX};
+
+/// A parsed distance-field blob: validated once, then every lookup is infallible.
+///
+/// It borrows the blob's bytes (any alignment, e.g. an `include_bytes!` in flash) and copies
+/// nothing. Reading a cell is an index computation and one byte load.
+///
+/// # Coordinates
+/// Map frame, metres. Cell `(ix, iy)` covers `[origin_x + ix·s, origin_x + (ix+1)·s) ×
+/// [origin_y + iy·s, origin_y + (iy+1)·s)` with `s` the cell size; `iy = 0` is the lowest row.
+/// A point off the map reads the cell nearest to it plus the Euclidean distance from the point
+/// to the map's rectangle (models.md §3), so an endpoint off the map looks unlikely rather than
+/// uninformative.
+#[derive(Clone, Copy, Debug)]
+pub struct FieldView<'a> {
+    header: FieldHeader,
+    codes: &'a [u8],
+    width_f: f32,
+    height_f: f32,
+    last_ix: u32,
+    last_iy: u32,
+    stride: usize,
+    inv_cell_size: f32,
+    step_m: f32,
+    /// Code steps per cell length: `cell_size / step`.
+    steps_per_cell: f32,
+}
+
+impl<'a> FieldView<'a> {
+    /// Parses and checks a whole blob: every header field, both checksums, exact length.
+    ///
+    /// # Errors
+    /// Any [`BlobError`] of the format, including [`BlobError::TrailingBytes`] when `bytes` is
+    /// longer than the blob. Never panics, whatever the bytes.
+    pub fn parse(bytes: &'a [u8]) -> Result<Self, BlobError> {
+        let (view, rest) = Self::parse_prefix(bytes)?;
+        if rest.is_empty() {
+            Ok(view)
+        } else {
+            Err(BlobError::TrailingBytes)
+        }
+    }
+
+    /// As [`FieldView::parse`], for a blob at the start of a longer region (a flash partition
+    /// padded with erased bytes): returns the view and the bytes after the blob.
+    ///
+    /// # Errors
+    /// As [`FieldView::parse`], without [`BlobError::TrailingBytes`].
+    pub fn parse_prefix(bytes: &'a [u8]) -> Result<(Self, &'a [u8]), BlobError> {
+        let (header, codes, rest) = parse_blob(bytes)?;
+        let stride = usize::try_from(header.width).map_err(|_| BlobError::TooLarge)?;
+        let step_m = header.step_m();
+        let view = Self {
+            header,
+            codes,
+            width_f: header.width as f32,
+            height_f: header.height as f32,
+            last_ix: header.width.saturating_sub(1),
+            last_iy: header.height.saturating_sub(1),
+            stride,
+            inv_cell_size: 1.0 / header.cell_size_m,
+            step_m,
+            steps_per_cell: header.cell_size_m / step_m,
+        };
+        Ok((view, rest))
+    }
+
+    /// The blob's header.
+    pub fn header(&self) -> &FieldHeader {
+        &self.header
+    }
+
+    /// Width, cells.
+    pub fn width(&self) -> u32 {
+        self.header.width
+    }
+
+    /// Height, cells.
+    pub fn height(&self) -> u32 {
+        self.header.height
+    }
+
+    /// Cell size, metres.
+    pub fn cell_size_m(&self) -> f32 {
+        self.header.cell_size_m
+    }
+
+    /// `d_max`, metres: distances are clamped here (code 255).
+    pub fn max_dist_m(&self) -> f32 {
+        self.header.max_dist_m
+    }
+
+    /// One code step, metres (`d_max / 255`); the quantization error of a stored distance is at
+    /// most half of it.
+    pub fn step_m(&self) -> f32 {
+        self.step_m
+    }
+
+    /// The payload: one code per cell, row-major, row 0 = lowest y.
+    pub fn codes(&self) -> &'a [u8] {
+        self.codes
+    }
+
+    /// The code of cell `(ix, iy)`, or `None` off the grid.
+    pub fn code(&self, ix: u32, iy: u32) -> Option<u8> {
+        if ix > self.last_ix || iy > self.last_iy {
+            return None;
+        }
+        let i = (iy as usize)
+            .checked_mul(self.stride)?
+            .checked_add(ix as usize)?;
+        self.codes.get(i).copied()
+    }
+
+    /// Map-frame metres to continuous grid coordinates (cell units, `0` at the origin).
+    #[inline]
+    pub fn to_grid(&self, x_m: f32, y_m: f32) -> (f32, f32) {
+        (
+            (x_m - self.header.origin_x_m) * self.inv_cell_size,
+            (y_m - self.header.origin_y_m) * self.inv_cell_size,
+        )
+    }
+
+    /// The code of the cell nearest to grid point `(gx, gy)` and the squared distance, in cell
+    /// units, from the point to the map's rectangle (0 on the map).
+    ///
+    /// Branch-free and total: NaN coordinates read cell 0 (and give a NaN distance).
+    #[inline(always)]
+    pub(crate) fn lookup_grid(&self, gx: f32, gy: f32) -> (u8, f32) {
+        // `max`/`min` return the non-NaN operand, and `as u32` saturates: no UB, no panic.
+        let cx = gx.max(0.0).min(self.width_f);
+        let cy = gy.max(0.0).min(self.height_f);
+        let ex = gx - cx;
+        let ey = gy - cy;
+        let ix = (cx as u32).min(self.last_ix) as usize;
+        let iy = (cy as u32).min(self.last_iy) as usize;
+        let code = self
+            .codes
+            .get(iy * self.stride + ix)
+            .copied()
+            .unwrap_or(CODE_MAX);
+        (code, ex * ex + ey * ey)
+    }
+
+    /// The quantized distance index (0..=255) used by the likelihood table at grid point
+    /// `(gx, gy)`: the cell's code plus the off-map distance in code steps (rounded), clamped.
+    #[inline(always)]
+    pub(crate) fn table_index(&self, gx: f32, gy: f32) -> usize {
+        let (code, off2) = self.lookup_grid(gx, gy);
+        let extra = (crate::math::sqrt(off2) * self.steps_per_cell + 0.5).min(255.0);
+        (u32::from(code) + extra as u32).min(u32::from(CODE_MAX)) as usize
+    }
+
+    /// Distance from a map-frame point to the nearest occupied cell, metres, as stored:
+    /// the cell's code times [`FieldView::step_m`], plus the exact Euclidean distance from the
+    /// point to the map's rectangle when it lies off the map.
+    ///
+    /// Inside the map the result is at most `d_max`; NaN input gives NaN.
+    pub fn distance_m(&self, x_m: f32, y_m: f32) -> f32 {
+        let (gx, gy) = self.to_grid(x_m, y_m);
+        let (code, off2) = self.lookup_grid(gx, gy);
+        f32::from(code) * self.step_m + crate::math::sqrt(off2) * self.header.cell_size_m
+    }
+
+    /// `1 / cell_size`, cells per metre.
+    pub(crate) fn inv_cell_size(&self) -> f32 {
+        self.inv_cell_size
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::blob::emit_blob;
+    use super::*;
+
+    fn blob() -> Vec<u8> {
+        // 3 × 2 cells of 0.5 m at origin (1, 2); codes = 10·(index).
+        let h = FieldHeader::new(3, 2, 0.5, 1.0, 2.0);
+        let codes: Vec<u8> = (0..6).map(|i| 10 * i).collect();
+        let mut out = vec![0; h.required_len().unwrap()];
+        emit_blob(&h, &codes, &mut out).unwrap();
+        out
+    }
+
+    #[test]
+    fn lookups_table() {
+        let b = blob();
+        let v = FieldView::parse(&b).unwrap();
+        let step = 2.0f32 / 255.0;
+        // (x, y, expected distance): cell-local points, then off-map points.
+        let cases: [(f32, f32, f32); 6] = [
+            (1.1, 2.1, 0.0),
+            (1.6, 2.1, 10.0 * step),
+            (2.4, 2.9, 50.0 * step),
+            (2.4, 2.4, 20.0 * step),
+            (0.0, 2.1, 1.0),
+            (2.5 + 3.0, 3.0 + 4.0, 50.0 * step + 5.0),
+        ];
+        for (x, y, want) in cases {
+            let got = v.distance_m(x, y);
+            assert!((got - want).abs() < 1e-5, "({x}, {y}): {got} vs {want}");
+        }
+        assert_eq!(v.code(2, 1), Some(50));
+        assert_eq!(v.code(3, 0), None);
+        assert!(v.distance_m(f32::NAN, 0.0).is_nan());
+    }
+
+    #[test]
+    fn trailing_policy() {
+        let mut b = blob();
+        b.push(0xFF);
+        assert_eq!(FieldView::parse(&b).err(), Some(BlobError::TrailingBytes));
+        let (v, rest) = FieldView::parse_prefix(&b).unwrap();
+        assert_eq!((v.width(), rest), (3, &[0xFF][..]));
+    }
+}

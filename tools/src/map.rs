@@ -1,0 +1,314 @@
+//! ROS map_server maps (YAML + PGM or PNG), read with map_server's semantics exactly.
+//!
+//! For each pixel, `v` is its grey level (the mean of the colour channels, alpha ignored),
+//! `v ← 255 − v` when `negate` is set, and `p = (255 − v) / 255` (in f64, as map_server does).
+//! `p > occupied_thresh` is occupied, `p < free_thresh` free, anything else unknown (trinary;
+//! `scale` mode classifies occupied and free cells the same way, which is all the distance field
+//! needs). A pixel of 205 gives `p = 0.196078…`, above the usual `free_thresh` of 0.196: unknown.
+//!
+//! Image row 0 is the **top** of the map; the grid this module returns has row 0 at the
+//! **bottom** (lowest y), the map frame's and the blob's order. `origin` is the lower-left corner
+//! of the lower-left cell; its yaw must be 0 (map_server ignores it too; we refuse it rather than
+//! silently drop a rotation).
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// What one cell of a map is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Occupancy {
+    /// `p > occupied_thresh`.
+    Occupied,
+    /// `p < free_thresh`.
+    Free,
+    /// Neither.
+    Unknown,
+}
+
+/// A loaded occupancy grid.
+#[derive(Clone, Debug)]
+pub struct OccupancyMap {
+    /// Cells per row.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Cell size, metres.
+    pub resolution_m: f64,
+    /// Lower-left corner of cell (0, 0), metres.
+    pub origin_x_m: f64,
+    /// Lower-left corner of cell (0, 0), metres.
+    pub origin_y_m: f64,
+    /// Row-major, row 0 = lowest y (the image's bottom row).
+    pub cells: Vec<Occupancy>,
+}
+
+impl OccupancyMap {
+    /// The cell at column `ix`, row `iy` (row 0 = lowest y).
+    pub fn get(&self, ix: u32, iy: u32) -> Option<Occupancy> {
+        if ix >= self.width || iy >= self.height {
+            return None;
+        }
+        self.cells
+            .get(iy as usize * self.width as usize + ix as usize)
+            .copied()
+    }
+
+    /// Number of occupied cells.
+    pub fn occupied_count(&self) -> usize {
+        self.cells
+            .iter()
+            .filter(|c| **c == Occupancy::Occupied)
+            .count()
+    }
+}
+
+/// Why a map could not be loaded.
+#[derive(Debug)]
+pub enum MapError {
+    /// A file could not be read.
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The YAML is malformed or lacks a required key.
+    Yaml {
+        /// The YAML file.
+        path: PathBuf,
+        /// What the YAML parser said.
+        message: String,
+    },
+    /// The image could not be decoded.
+    Image {
+        /// The image file.
+        path: PathBuf,
+        /// What the decoder said.
+        message: String,
+    },
+    /// Thresholds outside `0 ≤ free_thresh < occupied_thresh ≤ 1` (or not finite).
+    BadThresholds {
+        /// `occupied_thresh`.
+        occupied: f64,
+        /// `free_thresh`.
+        free: f64,
+    },
+    /// Resolution not finite or ≤ 0.
+    BadResolution(f64),
+    /// Origin not finite, or with a non-zero yaw.
+    BadOrigin(String),
+    /// A `mode` other than `trinary` or `scale`.
+    UnsupportedMode(String),
+    /// The image is empty.
+    EmptyImage(PathBuf),
+}
+
+impl fmt::Display for MapError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Io { path, source } => write!(f, "cannot read {}: {source}", path.display()),
+            Self::Yaml { path, message } => {
+                write!(f, "malformed map yaml {}: {message}", path.display())
+            }
+            Self::Image { path, message } => {
+                write!(f, "cannot decode image {}: {message}", path.display())
+            }
+            Self::BadThresholds { occupied, free } => write!(
+                f,
+                "bad thresholds: need 0 <= free_thresh ({free}) < occupied_thresh ({occupied}) <= 1"
+            ),
+            Self::BadResolution(r) => write!(f, "bad resolution {r}: must be finite and > 0"),
+            Self::BadOrigin(m) => write!(f, "bad origin: {m}"),
+            Self::UnsupportedMode(m) => {
+                write!(
+                    f,
+                    "unsupported mode {m:?} (trinary and scale are supported)"
+                )
+            }
+            Self::EmptyImage(p) => write!(f, "image {} has no pixels", p.display()),
+        }
+    }
+}
+
+impl std::error::Error for MapError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Self::Io { source, .. } => Some(source),
+            _ => None,
+        }
+    }
+}
+
+/// The keys of a map_server YAML file.
+#[derive(Debug, Deserialize)]
+struct MapYaml {
+    image: String,
+    resolution: f64,
+    origin: Vec<f64>,
+    #[serde(default)]
+    negate: Negate,
+    occupied_thresh: f64,
+    free_thresh: f64,
+    #[serde(default)]
+    mode: Option<String>,
+}
+
+/// map_server reads `negate` as an int; accept `0`/`1` and `true`/`false`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(untagged)]
+enum Negate {
+    #[default]
+    Absent,
+    Int(i64),
+    Bool(bool),
+}
+
+impl Negate {
+    fn is_set(&self) -> bool {
+        match self {
+            Self::Absent => false,
+            Self::Int(i) => *i != 0,
+            Self::Bool(b) => *b,
+        }
+    }
+}
+
+/// Classifies one grey level (0..=255) with map_server's rule.
+pub fn classify_pixel(
+    grey: f64,
+    negate: bool,
+    occupied_thresh: f64,
+    free_thresh: f64,
+) -> Occupancy {
+    let v = if negate { 255.0 - grey } else { grey };
+    let p = (255.0 - v) / 255.0;
+    if p > occupied_thresh {
+        Occupancy::Occupied
+    } else if p < free_thresh {
+        Occupancy::Free
+    } else {
+        Occupancy::Unknown
+    }
+}
+
+/// Loads a map_server map from its YAML file; the image path is relative to the YAML's folder.
+///
+/// # Errors
+/// [`MapError`]: a missing or unreadable file, malformed YAML, an undecodable image, bad
+/// thresholds, resolution or origin, an unsupported mode.
+pub fn load_map(yaml_path: &Path) -> Result<OccupancyMap, MapError> {
+    let text = std::fs::read_to_string(yaml_path).map_err(|source| MapError::Io {
+        path: yaml_path.to_path_buf(),
+        source,
+    })?;
+    let y: MapYaml = serde_yaml::from_str(&text).map_err(|e| MapError::Yaml {
+        path: yaml_path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    if let Some(mode) = &y.mode {
+        if mode != "trinary" && mode != "scale" {
+            return Err(MapError::UnsupportedMode(mode.clone()));
+        }
+    }
+    let (occ, free) = (y.occupied_thresh, y.free_thresh);
+    if !(occ.is_finite() && free.is_finite() && 0.0 <= free && free < occ && occ <= 1.0) {
+        return Err(MapError::BadThresholds {
+            occupied: occ,
+            free,
+        });
+    }
+    if !(y.resolution.is_finite() && y.resolution > 0.0) {
+        return Err(MapError::BadResolution(y.resolution));
+    }
+    let (ox, oy) = match y.origin.as_slice() {
+        [x, y_, rest @ ..] if rest.len() <= 1 => {
+            let yaw = rest.first().copied().unwrap_or(0.0);
+            if !(x.is_finite() && y_.is_finite()) {
+                return Err(MapError::BadOrigin("not finite".into()));
+            }
+            if yaw != 0.0 {
+                return Err(MapError::BadOrigin(format!(
+                    "yaw {yaw} is not supported (must be 0)"
+                )));
+            }
+            (*x, *y_)
+        }
+        _ => {
+            return Err(MapError::BadOrigin(
+                "expected [x, y, yaw] with 2 or 3 numbers".into(),
+            ))
+        }
+    };
+    let image_path = yaml_path
+        .parent()
+        .unwrap_or_else(|| Path::new("."))
+        .join(&y.image);
+    let bytes = std::fs::read(&image_path).map_err(|source| MapError::Io {
+        path: image_path.clone(),
+        source,
+    })?;
+    let img = image::load_from_memory(&bytes).map_err(|e| MapError::Image {
+        path: image_path.clone(),
+        message: e.to_string(),
+    })?;
+    let (w, h) = (img.width(), img.height());
+    if w == 0 || h == 0 {
+        return Err(MapError::EmptyImage(image_path));
+    }
+    let negate = y.negate.is_set();
+    let mut cells = vec![Occupancy::Unknown; w as usize * h as usize];
+    // Grey as the mean of the colour channels, alpha dropped (map_server's averaging). Read
+    // as 16 bits: an 8-bit value v arrives as 257·v, and dividing the exact integer sum by 257
+    // gives back v (or the channel sum) exactly, so 8-bit images are classified bit for bit as
+    // map_server does.
+    let rgba = img.to_rgba16();
+    let has_colour = img.color().has_color();
+    for (x, row_img, px) in rgba.enumerate_pixels() {
+        let [r, g, b, _a] = px.0;
+        let grey = if has_colour {
+            (f64::from(r) + f64::from(g) + f64::from(b)) / 257.0 / 3.0
+        } else {
+            f64::from(r) / 257.0
+        };
+        let iy = h - 1 - row_img;
+        if let Some(c) = cells.get_mut(iy as usize * w as usize + x as usize) {
+            *c = classify_pixel(grey, negate, occ, free);
+        }
+    }
+    Ok(OccupancyMap {
+        width: w,
+        height: h,
+        resolution_m: y.resolution,
+        origin_x_m: ox,
+        origin_y_m: oy,
+        cells,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_rule_table() {
+        // (grey, negate, expected) with the usual 0.65 / 0.196 thresholds.
+        let cases = [
+            (0.0, false, Occupancy::Occupied),
+            (89.0, false, Occupancy::Occupied),
+            (90.0, false, Occupancy::Unknown),
+            (205.0, false, Occupancy::Unknown),
+            (206.0, false, Occupancy::Free),
+            (254.0, false, Occupancy::Free),
+            (255.0, true, Occupancy::Occupied),
+            (0.0, true, Occupancy::Free),
+        ];
+        for (g, n, want) in cases {
+            assert_eq!(
+                classify_pixel(g, n, 0.65, 0.196),
+                want,
+                "grey {g} negate {n}"
+            );
+        }
+    }
+}
