@@ -6,3 +6,6 @@ pub mod plot;
 
 pub mod field_cmd;
 pub mod map;
+
+pub mod carmen;
+pub mod mapping;
