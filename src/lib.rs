@@ -2,6 +2,7 @@
 #![cfg_attr(not(test), no_std)]
 
 pub mod beam;
+pub mod em;
 pub mod intrinsics;
 pub mod math;
 pub mod pose;
