@@ -3,6 +3,7 @@
 
 pub mod beam;
 pub mod diagnostic;
+pub mod em;
 pub mod field;
 pub mod intrinsics;
 pub mod math;

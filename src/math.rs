@@ -164,6 +164,12 @@ pub fn erfc_f64(x: f64) -> f64 {
     libm::erfc(x)
 }
 
+/// Error function in f64 (libm).
+#[inline]
+pub fn erf_f64(x: f64) -> f64 {
+    libm::erf(x)
+}
+
 /// Standard normal CDF in f64.
 #[inline]
 pub fn normal_cdf_f64(u: f64) -> f64 {
