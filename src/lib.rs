@@ -2,12 +2,17 @@
 #![cfg_attr(not(test), no_std)]
 
 pub mod beam;
+pub mod gaussian;
 pub mod intrinsics;
+pub mod landmark;
 pub mod math;
 pub mod pose;
 pub mod scan;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
+pub use landmark::{
+    Feature, FeatureNoise, IntersectionError, Landmark, LandmarkError, TwoFeaturePoses,
+};
 pub use pose::{wrap_angle, Pose, SensorMount};
 pub use scan::{Beam, BeamLayout, Reading, Scan, ScanError, ScanScore};
