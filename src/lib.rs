@@ -5,7 +5,9 @@ pub mod beam;
 pub mod diagnostic;
 pub mod em;
 pub mod field;
+pub mod gaussian;
 pub mod intrinsics;
+pub mod landmark;
 pub mod math;
 pub mod model;
 pub mod pose;
@@ -20,6 +22,9 @@ pub use field::{
     LikelihoodParams, DEFAULT_MAX_DIST_M, EDT_INFINITY,
 };
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
+pub use landmark::{
+    Feature, FeatureNoise, IntersectionError, Landmark, LandmarkError, TwoFeaturePoses,
+};
 pub use model::{SensorModel, Stride};
 pub use pose::{wrap_angle, Pose, SensorMount};
 pub use scan::{Beam, BeamLayout, Reading, Scan, ScanError, ScanScore};
