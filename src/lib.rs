@@ -6,6 +6,7 @@ pub mod intrinsics;
 pub mod math;
 pub mod pose;
 pub mod scan;
+pub mod sonar;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
