@@ -5,6 +5,7 @@
 //! crate's math façade), so an error in one is not silently copied into the other.
 
 pub mod reference;
+pub mod sonar_sim;
 
 use std::path::PathBuf;
 
