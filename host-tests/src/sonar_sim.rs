@@ -279,6 +279,9 @@ fn wrap(a: f64) -> f64 {
     a
 }
 
+/// Origin x, origin y (metres), true range (metres), wall point within range.
+type Geometry = (f64, f64, f64, Option<(f64, f64)>);
+
 /// Simulates one full cycle of `groups` (each fired alone in time: no lingering echoes) at
 /// robot pose `(x, y, θ)`. Returns one beam per transducer in index order; transducers in no
 /// group get `NaN`.
@@ -293,8 +296,8 @@ pub fn simulate_cycle(
 ) -> Vec<SimBeam> {
     let n = ring.bearings_rad.len();
     let zmax = ring.max_range_m;
-    // Geometry of each transducer: origin, direction, true range, wall point.
-    let geo: Vec<(f64, f64, f64, Option<(f64, f64)>)> = ring
+    // Geometry of each transducer: origin x, origin y, true range, wall point.
+    let geo: Vec<Geometry> = ring
         .bearings_rad
         .iter()
         .map(|&b| {
