@@ -6,6 +6,7 @@
 
 pub mod reference;
 pub mod sonar_sim;
+pub mod sonar_uci;
 
 use std::path::PathBuf;
 
