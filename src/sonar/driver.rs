@@ -3,7 +3,7 @@
 //! One 7-bit bus address per transducer. For each group of the [`Schedule`], in order:
 //! 1. start ranging on every transducer of the group: write `[0x00, 0x51]` (command register 0,
 //!    command 0x51 = "range, result in centimetres");
-//! 2. wait the schedule's interval with the [`DelayNs`] (give it at least the ranger's ranging
+//! 2. wait the schedule's interval (to the nearest microsecond) with the [`DelayNs`] (give it at least the ranger's ranging
 //!    time: 65 ms for an SRF08 at its default range setting);
 //! 3. for every transducer of the group, read the first echo: write `[0x02]` then read two bytes
 //!    (registers 2 and 3, high byte first), in one `write_read`.
@@ -116,14 +116,10 @@ impl<I2C: I2c, D: DelayNs, const M: usize, const G: usize> SonarRing<I2C, D, M, 
             Err(e) => Err((e, i2c, delay)),
             Ok((addresses, cofired)) => {
                 // Microseconds, rounded up, saturating at u32::MAX (≈ 71 minutes).
-                let us = f64::from(schedule.interval_s()) * 1e6;
-                // `as` saturates; the interval is finite and ≥ 0 (validated by the schedule).
-                let whole = us as u32;
-                let interval_us = if f64::from(whole) < us {
-                    whole.saturating_add(1)
-                } else {
-                    whole
-                };
+                // Nearest microsecond (rounding up would turn the f32 representation error of
+                // 0.07 s into 70 001 µs); `as` saturates at u32::MAX (≈ 71 minutes). The
+                // interval is finite and ≥ 0 (validated by the schedule).
+                let interval_us = (f64::from(schedule.interval_s()) * 1e6 + 0.5) as u32;
                 Ok(Self {
                     i2c,
                     delay,
