@@ -105,7 +105,7 @@ fn bus_error_is_wrapped_and_stops_the_cycle() {
         start(0x70),
         start(0x73),
         read(0x70, 123),
-        read(0x73, 10).with_error(fail.clone()),
+        read(0x73, 10).with_error(fail),
     ];
     let i2c = I2cMock::new(&expect);
     let delay = CheckedDelay::new(&[D::delay_us(70_000)]);

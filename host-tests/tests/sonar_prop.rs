@@ -4,6 +4,7 @@
 
 use beamfield::sonar::{CrosstalkModel, Ring, Schedule, SonarModel};
 use beamfield::BeamIntrinsics;
+use host_tests::sonar_sim::reference_c;
 use proptest::prelude::*;
 
 const M: usize = 24;
@@ -37,41 +38,6 @@ fn schedule_parts() -> impl Strategy<Value = (usize, Vec<Vec<usize>>, f32)> {
             }
             (n, groups, interval)
         })
-}
-
-/// c_i from the definitions, in f64: group g fires at g·Δ; j's last pulse before i's is
-/// ((g_i − g_j) mod T)·Δ earlier; weight = clamp(1 − age/L, 0, 1); same group = 1.
-fn reference_c(
-    bearings: &[f64],
-    groups: &[Vec<usize>],
-    interval: f64,
-    lifetime: f64,
-    q: &dyn Fn(f64) -> f64,
-    i: usize,
-) -> f64 {
-    let t = groups.len();
-    let gi = groups.iter().position(|g| g.contains(&i));
-    let Some(gi) = gi else { return 0.0 };
-    let mut clean = 1.0;
-    for (gj, g) in groups.iter().enumerate() {
-        for &j in g {
-            if j == i {
-                continue;
-            }
-            let w = if gj == gi {
-                1.0
-            } else {
-                let age = ((gi + t - gj) % t) as f64 * interval;
-                (1.0 - age / lifetime).clamp(0.0, 1.0)
-            };
-            let mut d = (bearings[i] - bearings[j]).rem_euclid(std::f64::consts::TAU);
-            if d > std::f64::consts::PI {
-                d = std::f64::consts::TAU - d;
-            }
-            clean *= 1.0 - w * q(d);
-        }
-    }
-    1.0 - clean
 }
 
 proptest! {
