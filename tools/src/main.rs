@@ -19,6 +19,9 @@ struct Cli {
 enum Command {
     /// Print the tool's version and the crate's build configuration.
     Info,
+    /// Ultrasonic ring tools (firing schedules and crosstalk).
+    #[command(subcommand)]
+    Sonar(beamfield_tools::sonar::SonarCommand),
 }
 
 fn main() -> ExitCode {
@@ -33,5 +36,15 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
+        Command::Sonar(cmd) => match beamfield_tools::sonar::run(&cmd, cli.json) {
+            Ok(out) => {
+                println!("{out}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("beamfield sonar: {e}");
+                ExitCode::FAILURE
+            }
+        },
     }
 }
