@@ -63,6 +63,13 @@ pub enum ScheduleError {
     BadInterval,
     /// The speed of sound is not finite or ≤ 0.
     BadSpeedOfSound,
+    /// The ring has more transducers than the schedule's capacity `M`.
+    RingTooLarge {
+        /// Transducers in the ring.
+        ring: usize,
+        /// The compile-time capacity.
+        capacity: usize,
+    },
 }
 
 impl core::fmt::Display for ScheduleError {
@@ -84,6 +91,12 @@ impl core::fmt::Display for ScheduleError {
             }
             Self::BadInterval => f.write_str("interval must be finite and >= 0"),
             Self::BadSpeedOfSound => f.write_str("speed of sound must be finite and > 0"),
+            Self::RingTooLarge { ring, capacity } => {
+                write!(
+                    f,
+                    "ring has {ring} transducers, schedule capacity is {capacity}"
+                )
+            }
         }
     }
 }
@@ -112,7 +125,7 @@ impl<const M: usize, const G: usize> Schedule<M, G> {
     /// [`ScheduleError::NoGroups`], [`ScheduleError::TooManyGroups`],
     /// [`ScheduleError::EmptyGroup`], [`ScheduleError::IndexOutOfRange`],
     /// [`ScheduleError::Duplicate`], [`ScheduleError::BadInterval`],
-    /// [`ScheduleError::BadSpeedOfSound`].
+    /// [`ScheduleError::BadSpeedOfSound`], [`ScheduleError::RingTooLarge`].
     pub fn new<const R: usize>(
         ring: &Ring<R>,
         groups: &[&[usize]],
@@ -135,8 +148,14 @@ impl<const M: usize, const G: usize> Schedule<M, G> {
             return Err(ScheduleError::BadSpeedOfSound);
         }
         let n = ring.len();
+        if n > M {
+            return Err(ScheduleError::RingTooLarge {
+                ring: n,
+                capacity: M,
+            });
+        }
         let mut group_of: Vec<u16, M> = Vec::new();
-        for _ in 0..n.min(M) {
+        for _ in 0..n {
             // Cannot fail: at most M pushes.
             let _ = group_of.push(UNSCHEDULED);
         }
@@ -321,6 +340,13 @@ mod tests {
                 Some(ScheduleError::BadSpeedOfSound)
             );
         }
+        assert_eq!(
+            Schedule::<4, 4>::new(&r, &[&[0]], 0.1, 343.0).err(),
+            Some(ScheduleError::RingTooLarge {
+                ring: 8,
+                capacity: 4
+            })
+        );
     }
 
     #[test]
