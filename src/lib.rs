@@ -12,6 +12,7 @@ pub mod math;
 pub mod model;
 pub mod pose;
 pub mod scan;
+pub mod sonar;
 pub mod tempered;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};

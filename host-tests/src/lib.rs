@@ -6,6 +6,8 @@
 
 pub mod field_reference;
 pub mod reference;
+pub mod sonar_sim;
+pub mod sonar_uci;
 
 use std::path::PathBuf;
 

@@ -9,3 +9,4 @@ pub mod map;
 
 pub mod carmen;
 pub mod mapping;
+pub mod sonar;

@@ -22,6 +22,9 @@ enum Command {
     /// Distance-field blobs for the likelihood field: build one from a ROS map, query it,
     /// render it as a picture.
     Field(beamfield_tools::field_cmd::FieldArgs),
+    /// Ultrasonic ring tools (firing schedules and crosstalk).
+    #[command(subcommand)]
+    Sonar(beamfield_tools::sonar::SonarCommand),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +43,16 @@ fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("beamfield field: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Command::Sonar(cmd) => match beamfield_tools::sonar::run(&cmd, cli.json) {
+            Ok(out) => {
+                println!("{out}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("beamfield sonar: {e}");
                 ExitCode::FAILURE
             }
         },
