@@ -4,6 +4,7 @@
 //! independent of the crate's f32 code: it shares no function with it (std's f64 math, not the
 //! crate's math façade), so an error in one is not silently copied into the other.
 
+pub mod firmware_cases;
 pub mod reference;
 
 use std::path::PathBuf;
