@@ -5,6 +5,7 @@
 //! crate's math façade), so an error in one is not silently copied into the other.
 
 pub mod field_reference;
+pub mod firmware_cases;
 pub mod reference;
 pub mod sonar_sim;
 pub mod sonar_uci;

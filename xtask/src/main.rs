@@ -1,0 +1,477 @@
+//! `cargo xtask`: project tasks that need more than `cargo test`: the firmware under QEMU,
+//! instruction counts, cross builds. Run `cargo xtask --help`.
+
+use clap::{Parser, Subcommand};
+use std::collections::BTreeMap;
+use std::fs::{self, File};
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode, Stdio};
+
+/// The firmware's target: Cortex-M4F (QEMU `mps2-an386`).
+const FIRMWARE_TARGET: &str = "thumbv7em-none-eabihf";
+/// Targets the library must build for.
+const CROSS_TARGETS: [&str; 4] = [
+    "thumbv7em-none-eabihf",
+    "thumbv7m-none-eabi",
+    "thumbv6m-none-eabi",
+    "riscv32imc-unknown-none-elf",
+];
+/// Seconds before a QEMU run is killed (a hung program then fails with status 124).
+const QEMU_TIMEOUT_S: &str = "120";
+/// Beams per scan in `firmware/src/bin/insns.rs`.
+const INSNS_BEAMS: u64 = 360;
+/// What each measured region of `insns.rs` does, in order.
+const INSNS_REGIONS: [&str; 4] = [
+    "empty loop (sum of ranges)",
+    "ln per beam (math::ln)",
+    "exp per beam (math::exp)",
+    "beam mixture, given z*",
+];
+
+type Result<T = ()> = std::result::Result<T, String>;
+
+/// Project tasks for beamfield (firmware under QEMU, instruction counts, cross builds).
+///
+/// The firmware lives in `firmware/` (its own package and lockfile, excluded from the
+/// workspace). QEMU is `qemu-system-arm` on the `mps2-an386` board (Cortex-M4 with FPU); its
+/// output is written to files, never to a pipe, and every run is under a 120 s timeout.
+#[derive(Parser)]
+#[command(name = "cargo xtask", about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Task,
+}
+
+#[derive(Subcommand)]
+enum Task {
+    /// Build a firmware program (default: the reference check) and run it under QEMU.
+    ///
+    /// Installs the rustup target thumbv7em-none-eabihf if it is missing; says how to install
+    /// qemu-system-arm if that is missing. Prints the program's semihosting output and exits
+    /// with its status (0: every case within tolerance).
+    Qemu {
+        /// Which program of firmware/src/bin to run.
+        #[arg(long, default_value = "check")]
+        bin: String,
+        /// QEMU machine (mps2-an386: Cortex-M4F; mps2-an500: Cortex-M7).
+        #[arg(long, default_value = "mps2-an386")]
+        machine: String,
+        /// Build with the dev profile instead of release.
+        #[arg(long)]
+        debug: bool,
+    },
+    /// Count guest instructions per beam of the beam mixture, with baselines, under QEMU.
+    ///
+    /// Builds firmware/src/bin/insns.rs (release) and runs it with the counting plugin of
+    /// ../shared/tools/qemu-insncount/ (needs gcc, and llvm-nm from `rustup component add
+    /// llvm-tools`, which is installed if missing). Counts are exact and repeat run to run;
+    /// they are instructions, not cycles.
+    Insns {
+        /// QEMU machine.
+        #[arg(long, default_value = "mps2-an386")]
+        machine: String,
+    },
+    /// Build the library for every bare-metal target, without and with each feature and with
+    /// all of them; then link the firmware with each optional feature (proof: no allocator).
+    Cross,
+    /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
+    Refcases {
+        /// Only check that the checked-in file is up to date (exit 1 if not).
+        #[arg(long)]
+        check: bool,
+    },
+    /// The firmware part of CI: refcases --check, cross, qemu, insns.
+    Ci,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Task::Qemu {
+            bin,
+            machine,
+            debug,
+        } => qemu(&bin, &machine, !debug),
+        Task::Insns { machine } => insns(&machine),
+        Task::Cross => cross(),
+        Task::Refcases { check } => refcases(check),
+        Task::Ci => refcases(true)
+            .and_then(|()| cross())
+            .and_then(|()| qemu("check", "mps2-an386", true))
+            .and_then(|()| insns("mps2-an386")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+fn cargo() -> Command {
+    Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
+}
+
+fn show(cmd: &Command) -> String {
+    let mut s = cmd.get_program().to_string_lossy().into_owned();
+    for a in cmd.get_args() {
+        s.push(' ');
+        s.push_str(&a.to_string_lossy());
+    }
+    s
+}
+
+/// Runs a command, echoing it, and fails unless it exits 0.
+fn run(cmd: &mut Command) -> Result {
+    eprintln!("+ {}", show(cmd));
+    let status = cmd
+        .status()
+        .map_err(|e| format!("cannot start `{}`: {e}", show(cmd)))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("`{}` failed ({status})", show(cmd)))
+    }
+}
+
+/// Runs a command and returns its stdout (stderr passes through).
+fn capture(cmd: &mut Command) -> Result<String> {
+    let out = cmd
+        .stderr(Stdio::inherit())
+        .output()
+        .map_err(|e| format!("cannot start `{}`: {e}", show(cmd)))?;
+    if !out.status.success() {
+        return Err(format!("`{}` failed ({})", show(cmd), out.status));
+    }
+    String::from_utf8(out.stdout).map_err(|e| format!("`{}`: {e}", show(cmd)))
+}
+
+fn ensure_target(target: &str) -> Result {
+    let installed = capture(Command::new("rustup").args(["target", "list", "--installed"]))
+        .map_err(|e| {
+            format!("{e}\n  (without rustup, install the Rust standard library for {target})")
+        })?;
+    if installed.lines().any(|l| l.trim() == target) {
+        return Ok(());
+    }
+    run(Command::new("rustup").args(["target", "add", target]))
+}
+
+fn ensure_qemu() -> Result {
+    let ok = Command::new("qemu-system-arm")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if ok {
+        Ok(())
+    } else {
+        Err("qemu-system-arm not found. Install it:\n  \
+             Debian/Ubuntu: sudo apt-get install -y --no-install-recommends qemu-system-arm\n  \
+             Fedora: sudo dnf install qemu-system-arm    macOS: brew install qemu"
+            .to_string())
+    }
+}
+
+/// Builds the firmware's binaries and returns their ELF paths by name.
+fn build_firmware(release: bool, features: Option<&str>) -> Result<BTreeMap<String, PathBuf>> {
+    ensure_target(FIRMWARE_TARGET)?;
+    let dir = repo_root().join("firmware");
+    let mut cmd = cargo();
+    cmd.current_dir(&dir).args([
+        "build",
+        "--target",
+        FIRMWARE_TARGET,
+        "--bins",
+        "--message-format=json-render-diagnostics",
+    ]);
+    if release {
+        cmd.arg("--release");
+    }
+    if let Some(f) = features {
+        cmd.args(["--features", f]);
+    }
+    eprintln!("+ (cd firmware && {})", show(&cmd));
+    let out = capture(&mut cmd)?;
+    let mut elves = BTreeMap::new();
+    for line in out.lines() {
+        let Ok(msg) = serde_json::from_str::<serde_json::Value>(line) else {
+            continue;
+        };
+        if msg["reason"] != "compiler-artifact" {
+            continue;
+        }
+        if let (Some(name), Some(exe)) =
+            (msg["target"]["name"].as_str(), msg["executable"].as_str())
+        {
+            elves.insert(name.to_string(), PathBuf::from(exe));
+        }
+    }
+    Ok(elves)
+}
+
+/// A scratch directory for QEMU's output files (never a pipe: see target.md).
+fn scratch() -> Result<PathBuf> {
+    let dir = std::env::temp_dir().join(format!("beamfield-xtask-{}", std::process::id()));
+    fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    Ok(dir)
+}
+
+/// Runs `cmd` with stdout and stderr sent to files; returns (exit code, stdout, stderr).
+fn run_to_files(cmd: &mut Command, name: &str) -> Result<(i32, String, String)> {
+    let dir = scratch()?;
+    let (out_p, err_p) = (
+        dir.join(format!("{name}.stdout")),
+        dir.join(format!("{name}.stderr")),
+    );
+    let file = |p: &Path| File::create(p).map_err(|e| format!("{}: {e}", p.display()));
+    cmd.stdin(Stdio::null())
+        .stdout(file(&out_p)?)
+        .stderr(file(&err_p)?);
+    eprintln!("+ {} >{} 2>{}", show(cmd), out_p.display(), err_p.display());
+    let status = cmd
+        .status()
+        .map_err(|e| format!("cannot start `{}`: {e}", show(cmd)))?;
+    let read = |p: &Path| fs::read_to_string(p).unwrap_or_default();
+    let (out, err) = (read(&out_p), read(&err_p));
+    let _ = fs::remove_dir_all(&dir);
+    // A signal (no code) is reported as 128 + 9, like a shell would for a kill.
+    Ok((status.code().unwrap_or(137), out, err))
+}
+
+fn qemu(bin: &str, machine: &str, release: bool) -> Result {
+    ensure_qemu()?;
+    let elves = build_firmware(release, None)?;
+    let elf = elves.get(bin).ok_or_else(|| {
+        format!(
+            "no firmware program `{bin}`; there are: {}",
+            elves.keys().cloned().collect::<Vec<_>>().join(", ")
+        )
+    })?;
+    let (code, out, err) = run_to_files(
+        Command::new("timeout")
+            .args([QEMU_TIMEOUT_S, "qemu-system-arm"])
+            .args([
+                "-machine",
+                machine,
+                "-nographic",
+                "-semihosting-config",
+                "enable=on,target=native",
+                "-icount",
+                "shift=0",
+                "-kernel",
+            ])
+            .arg(elf),
+        bin,
+    )?;
+    print!("{out}");
+    eprint!("{err}");
+    match code {
+        0 => {
+            eprintln!("xtask: `{bin}` exited 0 under QEMU ({machine})");
+            Ok(())
+        }
+        124 => Err(format!(
+            "`{bin}` did not finish within {QEMU_TIMEOUT_S} s (hung?)"
+        )),
+        134 => Err(format!(
+            "QEMU stopped with a CPU lockup: does memory.x fit the `{machine}` board?"
+        )),
+        c => Err(format!("`{bin}` exited {c} under QEMU ({machine})")),
+    }
+}
+
+/// The shared instruction-count tools, beside the repository (`../shared/tools/...`).
+fn insncount_dir() -> Result<PathBuf> {
+    if let Some(p) = std::env::var_os("BEAMFIELD_INSNCOUNT") {
+        return Ok(PathBuf::from(p));
+    }
+    let mut dir = repo_root();
+    loop {
+        let c = dir.join("shared/tools/qemu-insncount");
+        if c.join("count-insns.sh").is_file() {
+            return Ok(c);
+        }
+        if !dir.pop() {
+            return Err(
+                "../shared/tools/qemu-insncount/count-insns.sh not found above the repository; \
+                 set BEAMFIELD_INSNCOUNT to its folder"
+                    .to_string(),
+            );
+        }
+    }
+}
+
+fn ensure_llvm_nm() -> Result {
+    if Command::new("llvm-nm")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        return Ok(());
+    }
+    let sysroot = capture(Command::new("rustc").args(["--print", "sysroot"]))?;
+    let host = capture(Command::new("rustc").args(["--print", "host-tuple"]))
+        .unwrap_or_else(|_| "x86_64-unknown-linux-gnu".to_string());
+    let nm = Path::new(sysroot.trim()).join(format!("lib/rustlib/{}/bin/llvm-nm", host.trim()));
+    if nm.is_file() {
+        return Ok(());
+    }
+    run(Command::new("rustup").args(["component", "add", "llvm-tools"]))
+}
+
+fn insns(machine: &str) -> Result {
+    ensure_qemu()?;
+    ensure_llvm_nm()?;
+    if Command::new("gcc")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .status()
+        .is_err()
+    {
+        return Err("gcc not found (it compiles the QEMU counting plugin): \
+                    sudo apt-get install -y gcc"
+            .to_string());
+    }
+    let tools = insncount_dir()?;
+    let elves = build_firmware(true, None)?;
+    let elf = elves
+        .get("insns")
+        .ok_or("the firmware has no `insns` program")?;
+    // The script caches the compiled plugin in $TMPDIR: give it a private one, so a stale
+    // plugin from elsewhere is never used.
+    let plugin_dir = scratch()?.with_extension("plugin");
+    fs::create_dir_all(&plugin_dir).map_err(|e| format!("{}: {e}", plugin_dir.display()))?;
+    let result = run_to_files(
+        Command::new("bash")
+            .arg(tools.join("count-insns.sh"))
+            .arg(elf)
+            .arg(machine)
+            .env("TMPDIR", &plugin_dir),
+        "insns",
+    );
+    let _ = fs::remove_dir_all(&plugin_dir);
+    let (code, out, err) = result?;
+    print!("{out}");
+    if code != 0 {
+        eprint!("{err}");
+        return Err(format!("the counting run exited {code}"));
+    }
+    let counts: Vec<u64> = out
+        .lines()
+        .chain(err.lines())
+        .filter_map(|l| {
+            let rest = l.strip_prefix("insncount: region ")?;
+            let (_, n) = rest.split_once(": ")?;
+            n.strip_suffix(" instructions")?.parse().ok()
+        })
+        .collect();
+    if counts.len() != INSNS_REGIONS.len() {
+        eprint!("{err}");
+        return Err(format!(
+            "expected {} measured regions, the plugin reported {}",
+            INSNS_REGIONS.len(),
+            counts.len()
+        ));
+    }
+    let per_beam = |n: u64| n as f64 / INSNS_BEAMS as f64;
+    println!("\ninstructions on {machine} ({FIRMWARE_TARGET}, release), {INSNS_BEAMS} beams:");
+    println!(
+        "{:<3} {:<30} {:>12} {:>10}",
+        "#", "region", "total", "per beam"
+    );
+    for (i, (name, n)) in INSNS_REGIONS.iter().zip(&counts).enumerate() {
+        println!("{i:<3} {name:<30} {n:>12} {:>10.1}", per_beam(*n));
+    }
+    let (empty, ln, mixture) = (counts[0], counts[1], counts[3]);
+    println!(
+        "beam mixture: {:.1} instructions per beam ({:.1} above the empty loop; {:.2}x one ln per beam)",
+        per_beam(mixture),
+        per_beam(mixture.saturating_sub(empty)),
+        mixture as f64 / ln as f64
+    );
+    Ok(())
+}
+
+/// The features a package declares (without `default`).
+fn features_of(manifest: &Path, package: &str) -> Result<Vec<String>> {
+    let meta = capture(
+        cargo()
+            .args([
+                "metadata",
+                "--no-deps",
+                "--format-version",
+                "1",
+                "--manifest-path",
+            ])
+            .arg(manifest),
+    )?;
+    let meta: serde_json::Value = serde_json::from_str(&meta).map_err(|e| e.to_string())?;
+    let pkg = meta["packages"]
+        .as_array()
+        .and_then(|ps| ps.iter().find(|p| p["name"] == package))
+        .ok_or_else(|| format!("package {package} not in {}", manifest.display()))?;
+    Ok(pkg["features"]
+        .as_object()
+        .map(|f| f.keys().filter(|k| *k != "default").cloned().collect())
+        .unwrap_or_default())
+}
+
+fn cross() -> Result {
+    let root = repo_root();
+    let features = features_of(&root.join("Cargo.toml"), "beamfield")?;
+    eprintln!("xtask: library features: {}", features.join(", "));
+    for target in CROSS_TARGETS {
+        ensure_target(target)?;
+        let lib = || {
+            let mut c = cargo();
+            c.current_dir(&root)
+                .args(["build", "-p", "beamfield", "--target", target]);
+            c
+        };
+        run(&mut lib())?;
+        for f in &features {
+            run(lib().args(["--features", f]))?;
+        }
+        run(lib().arg("--all-features"))?;
+    }
+    // The firmware has no #[global_allocator]: a crate graph that used `alloc` would not link.
+    let fw = features_of(&root.join("firmware/Cargo.toml"), "beamfield-firmware")?;
+    for f in std::iter::once(None).chain(fw.iter().map(|f| Some(f.as_str()))) {
+        build_firmware(true, f)?;
+        eprintln!(
+            "xtask: firmware linked without an allocator (features: {})",
+            f.unwrap_or("none")
+        );
+    }
+    Ok(())
+}
+
+fn refcases(check: bool) -> Result {
+    let path = repo_root().join(host_tests::firmware_cases::GENERATED_PATH);
+    let want = host_tests::firmware_cases::render();
+    let have = fs::read_to_string(&path).unwrap_or_default();
+    if have == want {
+        eprintln!("xtask: {} is up to date", path.display());
+        return Ok(());
+    }
+    if check {
+        return Err(format!(
+            "{} is stale: run `cargo xtask refcases` and commit it",
+            path.display()
+        ));
+    }
+    fs::write(&path, want).map_err(|e| format!("{}: {e}", path.display()))?;
+    eprintln!("xtask: wrote {}", path.display());
+    Ok(())
+}
