@@ -23,7 +23,7 @@ pub enum SonarCommand {
     /// lingering echoes of earlier groups counted as co-fired, its usable range shortened, and
     /// its groups fired in the order (stride) that keeps lingering echoes least harmful.
     /// Full-range schedules are preferred; a squeezed one is recommended only when none reaches
-    /// the rate. Add `--json` (before `sonar`) for machine-readable output.
+    /// the rate. Add `--json` for machine-readable output.
     Schedule(ScheduleArgs),
 }
 
