@@ -360,6 +360,31 @@ fn tangent_circles_give_one_candidate() {
 }
 
 #[test]
+fn a_zero_range_feature_pins_the_position_and_leaves_the_heading_to_the_other() {
+    // The robot sits on landmark 1 (range 0, bearing meaningless: given as 2.0 on purpose) and
+    // sees landmark 2, 3 m east, at bearing 0.5 rad: position (0, 0), heading −0.5 rad.
+    let (l1, l2) = (
+        Landmark::new(0.0, 0.0, 0.0).unwrap(),
+        Landmark::new(3.0, 0.0, 0.0).unwrap(),
+    );
+    let f1 = Feature::new(0.0, 2.0, 0.0).unwrap();
+    let f2 = Feature::new(3.0, 0.5, 0.0).unwrap();
+    let got = two_feature_poses(&f1, &l1, &f2, &l2).unwrap();
+    assert_eq!(got.len(), 1);
+    let c = got.best();
+    assert_eq!((c.pose.x_m, c.pose.y_m), (0.0, 0.0));
+    assert!((c.pose.theta_rad + 0.5).abs() < 1e-6, "{c:?}");
+    assert_eq!(c.heading_spread_rad, 0.0);
+    // Swapped order: the same answer.
+    let got = two_feature_poses(&f2, &l2, &f1, &l1).unwrap().best();
+    assert!(
+        got.pose.x_m.abs() < 1e-6 && got.pose.y_m.abs() < 1e-6,
+        "{got:?}"
+    );
+    assert!((got.pose.theta_rad + 0.5).abs() < 1e-6, "{got:?}");
+}
+
+#[test]
 fn two_features_report_no_intersection() {
     let l1 = Landmark::new(0.0, 0.0, 0.0).unwrap();
     let l2 = Landmark::new(10.0, 0.0, 0.0).unwrap();
