@@ -301,16 +301,16 @@ impl<'a> LikelihoodField<'a> {
             let idx = self.view.table_index(ax + r * ux, ay + r * uy);
             // An index from `table_index` is ≤ 255, so this `get` never fails; the compiler
             // removes the check.
-            let term = self.table.get(idx).copied().unwrap_or(0.0);
+            let term = self.table.get(usize::from(idx)).copied().unwrap_or(0.0);
             // NaN fails both comparisons: neither valid nor max-range, hence invalid.
-            let valid = r >= 0.0 && r < max_r;
+            let valid = (r >= 0.0) & (r < max_r);
             let is_max = r >= max_r;
             sum += if valid { term } else { 0.0 };
             scored += u32::from(valid);
             max_range += u32::from(is_max);
             paired += 1;
             if valid {
-                each(k, idx as f32 * step);
+                each(k, f32::from(idx) * step);
             }
         }
         let invalid = paired - scored - max_range;
