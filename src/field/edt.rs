@@ -155,8 +155,7 @@ fn transform_line<'o>(
             let k = count - 1;
             let p = i64::from(sites.get(k).copied().unwrap_or(0));
             let fp = f.get(p as usize).copied().map_or(i64::MAX / 4, i64::from);
-            // (q − p) > 0; div_euclid with a positive divisor is the floor.
-            let cand = (hq - (fp + p * p)).div_euclid(2 * (q - p));
+            let cand = floor_div(hq - (fp + p * p), 2 * (q - p));
             if cand <= bounds.get(k).copied().unwrap_or(i64::MIN) {
                 count -= 1;
             } else {
@@ -181,19 +180,42 @@ fn transform_line<'o>(
         }
         return;
     }
-    // Read it back.
-    let mut k = 0usize;
-    for (q, o) in out.enumerate() {
-        let q = q as i64;
-        while bounds.get(k + 1).copied().unwrap_or(i64::MAX) < q {
-            k += 1;
+    // Read it back, parabola by parabola: parabola k is lowest on the integers of
+    // (bounds[k], bounds[k + 1]], clipped to the line.
+    let mut out = out;
+    let mut q = 0i64;
+    let envelope = sites.iter().zip(bounds.windows(2)).take(count);
+    for (&p, b) in envelope {
+        let hi = b.get(1).copied().unwrap_or(i64::MAX);
+        let fp = f.get(p as usize).copied().map_or(i64::MAX / 4, i64::from);
+        let p = i64::from(p);
+        while q <= hi {
+            let Some(o) = out.next() else {
+                return;
+            };
+            let d = q - p;
+            *o = u32::try_from(fp + d * d).unwrap_or(EDT_INFINITY);
+            q += 1;
         }
-        let p = sites.get(k).copied().unwrap_or(0);
-        let fp = f.get(p as usize).copied().unwrap_or(EDT_INFINITY);
-        let d = q - i64::from(p);
-        let v = i64::from(fp) + d * d;
-        *o = u32::try_from(v).unwrap_or(EDT_INFINITY);
     }
+}
+
+/// `⌊num / den⌋` for `den > 0`, exactly.
+///
+/// A 64-bit integer division costs 40–90 cycles on common x86 cores; an f64 division is several
+/// times cheaper. The f64 quotient of these operands (below 2⁴⁰ in magnitude) is within 2⁻¹² of
+/// the exact one, so its truncation is within one of the floor, and the integer corrections
+/// below make the result exact.
+#[inline]
+fn floor_div(num: i64, den: i64) -> i64 {
+    let mut s = (num as f64 / den as f64) as i64;
+    while s.saturating_mul(den) > num {
+        s -= 1;
+    }
+    while s.saturating_add(1).saturating_mul(den) <= num {
+        s += 1;
+    }
+    s
 }
 
 #[cfg(test)]
@@ -250,6 +272,28 @@ mod tests {
             let mut g = seeds.clone();
             run(&mut g, w, h);
             assert_eq!(g, brute(&seeds, w, h), "{w}×{h}");
+        }
+    }
+
+    #[test]
+    fn floor_div_matches_div_euclid() {
+        let nums = [
+            -1_000_000_007i64,
+            -7,
+            -6,
+            -1,
+            0,
+            1,
+            5,
+            6,
+            7,
+            4_294_967_295,
+            (1 << 40) - 3,
+        ];
+        for num in nums {
+            for den in [1i64, 2, 3, 7, 64, 65_535, 131_070] {
+                assert_eq!(floor_div(num, den), num.div_euclid(den), "{num}/{den}");
+            }
         }
     }
 

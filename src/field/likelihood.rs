@@ -292,26 +292,28 @@ impl<'a> LikelihoodField<'a> {
         let max_r = self.params.max_range_m;
         let step = self.view.step_m();
         let mut sum = 0.0f32;
-        let (mut scored, mut max_range, mut invalid) = (0u32, 0u32, 0u32);
+        let (mut scored, mut max_range) = (0u32, 0u32);
         let ranges = scan.ranges_m();
+        let mut paired = 0u32;
         for (k, (beam, &r)) in layout.beams().iter().zip(ranges).enumerate() {
             let ux = c * beam.cos - s * beam.sin;
             let uy = s * beam.cos + c * beam.sin;
             let idx = self.view.table_index(ax + r * ux, ay + r * uy);
             // An index from `table_index` is ≤ 255, so this `get` never fails; the compiler
             // removes the check.
-            let term = self.table.get(idx).copied().unwrap_or(0.0);
-            let is_invalid = r.is_nan() || r < 0.0;
+            let term = self.table.get(usize::from(idx)).copied().unwrap_or(0.0);
+            // NaN fails both comparisons: neither valid nor max-range, hence invalid.
+            let valid = (r >= 0.0) & (r < max_r);
             let is_max = r >= max_r;
-            let valid = !is_invalid && !is_max;
             sum += if valid { term } else { 0.0 };
             scored += u32::from(valid);
             max_range += u32::from(is_max);
-            invalid += u32::from(is_invalid);
+            paired += 1;
             if valid {
-                each(k, idx as f32 * step);
+                each(k, f32::from(idx) * step);
             }
         }
+        let invalid = paired - scored - max_range;
         ScanScore {
             log_likelihood: sum,
             scored: sat16(scored),

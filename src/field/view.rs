@@ -145,12 +145,35 @@ impl<'a> FieldView<'a> {
     }
 
     /// The quantized distance index (0..=255) used by the likelihood table at grid point
-    /// `(gx, gy)`: the cell's code plus the off-map distance in code steps (rounded), clamped.
+    /// `(gx, gy)`: the cell's code on the map; off it, the nearest cell's code plus the off-map
+    /// distance in code steps (rounded), clamped at 255.
+    ///
+    /// The on-map case is the fast path: two float-to-int conversions (saturating, so total),
+    /// four compares, one multiply-add and one byte load. The off-map case (a predictable
+    /// branch: endpoints off the map are rare) takes [`FieldView::off_map_index`].
     #[inline(always)]
-    pub(crate) fn table_index(&self, gx: f32, gy: f32) -> usize {
+    pub(crate) fn table_index(&self, gx: f32, gy: f32) -> u8 {
+        let ix = gx as i32;
+        let iy = gy as i32;
+        // `as i32` truncates toward zero, so (−1, 0) also gives 0: the sign tests exclude it.
+        let on = (gx >= 0.0)
+            & (gy >= 0.0)
+            & ((ix as u32) < self.header.width)
+            & ((iy as u32) < self.header.height);
+        if on {
+            let i = iy as usize * self.stride + ix as usize;
+            self.codes.get(i).copied().unwrap_or(CODE_MAX)
+        } else {
+            self.off_map_index(gx, gy)
+        }
+    }
+
+    /// [`FieldView::table_index`] for a point off the map (or NaN: gives 255).
+    #[inline(never)]
+    fn off_map_index(&self, gx: f32, gy: f32) -> u8 {
         let (code, off2) = self.lookup_grid(gx, gy);
         let extra = (crate::math::sqrt(off2) * self.steps_per_cell + 0.5).min(255.0);
-        (u32::from(code) + extra as u32).min(u32::from(CODE_MAX)) as usize
+        u8::try_from(u32::from(code) + extra as u32).unwrap_or(CODE_MAX)
     }
 
     /// Distance from a map-frame point to the nearest occupied cell, metres, as stored:
