@@ -3,4 +3,5 @@
 //! `beamfield` crate; this crate reads maps and logs, and writes blobs, reports and pictures.
 
 pub mod carmen;
+pub mod carmen_cli;
 pub mod mapping;
