@@ -452,7 +452,7 @@ impl CarmenLog {
         let mut pose = Extent::default();
         let mut prev_t: Option<f64> = None;
         for scan in &self.scans {
-            pose.add(f64::from(scan.pose.x_m), f64::from(scan.pose.y_m));
+            pose.add(decimal_f64(scan.pose.x_m), decimal_f64(scan.pose.y_m));
             s.theta_min_rad = s.theta_min_rad.min(scan.pose.theta_rad);
             s.theta_max_rad = s.theta_max_rad.max(scan.pose.theta_rad);
             if let Some(p) = prev_t {
@@ -521,6 +521,23 @@ impl Extent {
     }
 }
 
+/// The f64 with the same shortest decimal text as `v` (0.23f32 → 0.23, not 0.23000000417…),
+/// for reports of values that were written in decimal.
+pub fn decimal_f64(v: f32) -> f64 {
+    v.to_string().parse().unwrap_or(f64::from(v))
+}
+
+/// Serializes an f32 as the f64 with the same shortest decimal text (81.83, not
+/// 81.83000183105469); non-finite values become `null`.
+pub fn serialize_f32<S: serde::Serializer>(v: &f32, s: S) -> Result<S::Ok, S::Error> {
+    let shortest = decimal_f64(*v);
+    if shortest.is_finite() {
+        s.serialize_f64(shortest)
+    } else {
+        s.serialize_none()
+    }
+}
+
 /// What `beamfield log info` prints.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct LogStats {
@@ -537,14 +554,18 @@ pub struct LogStats {
     /// NaN, infinite or negative readings (below the max range).
     pub invalid_readings: usize,
     /// Smallest valid reading, metres.
+    #[serde(serialize_with = "serialize_f32")]
     pub min_range_m: f32,
     /// Largest reading below the max-range value, metres.
+    #[serde(serialize_with = "serialize_f32")]
     pub max_valid_range_m: f32,
     /// Laser pose extent, metres.
     pub pose_extent: Option<Bounds>,
     /// Smallest θ as written, radians.
+    #[serde(serialize_with = "serialize_f32")]
     pub theta_min_rad: f32,
     /// Largest θ as written, radians.
+    #[serde(serialize_with = "serialize_f32")]
     pub theta_max_rad: f32,
     /// Places where the ipc timestamp is smaller than the previous scan's.
     pub timestamp_steps_back: usize,

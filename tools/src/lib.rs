@@ -8,5 +8,6 @@ pub mod field_cmd;
 pub mod map;
 
 pub mod carmen;
+pub mod carmen_cli;
 pub mod mapping;
 pub mod sonar;

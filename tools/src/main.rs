@@ -25,6 +25,18 @@ enum Command {
     /// Ultrasonic ring tools (firing schedules and crosstalk).
     #[command(subcommand)]
     Sonar(beamfield_tools::sonar::SonarCommand),
+    /// Build maps: `map from-log` turns a CARMEN laser log with known poses into a ROS
+    /// map_server map (YAML + PGM).
+    Map {
+        #[command(subcommand)]
+        command: beamfield_tools::carmen_cli::MapCommand,
+    },
+    /// Inspect laser logs: `log info` summarizes a CARMEN log (scans, beams, max-range value,
+    /// pose extent, malformed lines).
+    Log {
+        #[command(subcommand)]
+        command: beamfield_tools::carmen_cli::LogCommand,
+    },
 }
 
 fn main() -> ExitCode {
@@ -56,5 +68,7 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::Map { command } => beamfield_tools::carmen_cli::run_map(command, cli.json),
+        Command::Log { command } => beamfield_tools::carmen_cli::run_log(command, cli.json),
     }
 }

@@ -181,3 +181,54 @@ fn map_round_trips_through_map_server_files_and_renders() {
     );
     eprintln!("PNG rendering: {}", png.display());
 }
+
+/// The reference ray cast on the real map: from each logged pose, the cast distance `z*` agrees
+/// with the measured range for most beams (the map was built from these very scans, so a
+/// disagreement means a wrong bearing convention, a wrong traversal or a transient object).
+#[test]
+fn ray_cast_on_the_intel_map_agrees_with_the_measured_ranges() {
+    use beamfield_tools::carmen::carmen_bearing_rad;
+    use beamfield_tools::mapping::ray_cast_grid;
+    let log = intel();
+    let grid = intel_map(&log);
+    let res = grid.geometry().resolution_m;
+    let (mut beams, mut within_two_cells) = (0usize, 0usize);
+    let mut errors = Vec::new();
+    // Every 9th scan: 102 scans spread over the log.
+    for scan in log.scans.iter().step_by(9) {
+        let n = scan.ranges_m.len();
+        for (i, &z) in scan.ranges_m.iter().enumerate() {
+            if z >= 81.83 {
+                continue;
+            }
+            let angle = f64::from(scan.pose.theta_rad) + carmen_bearing_rad(i, n);
+            let cast = ray_cast_grid(
+                &grid,
+                f64::from(scan.pose.x_m),
+                f64::from(scan.pose.y_m),
+                angle,
+                81.83,
+            );
+            let e = (f64::from(cast) - f64::from(z)).abs();
+            beams += 1;
+            if e <= 2.0 * res {
+                within_two_cells += 1;
+            }
+            errors.push(e);
+        }
+    }
+    errors.sort_by(f64::total_cmp);
+    let share = within_two_cells as f64 / beams as f64;
+    eprintln!(
+        "ray cast vs measured range on {beams} beams: {share:.4} within two cells; median |z − z*| \
+         {:.4} m, 90th percentile {:.4} m",
+        errors[errors.len() / 2],
+        errors[errors.len() * 9 / 10]
+    );
+    assert!(share > 0.8, "{share}");
+    assert!(
+        errors[errors.len() / 2] < res,
+        "median {}",
+        errors[errors.len() / 2]
+    );
+}
