@@ -9,5 +9,6 @@ pub mod map;
 
 pub mod carmen;
 pub mod carmen_cli;
+pub mod demo_assets;
 pub mod mapping;
 pub mod sonar;

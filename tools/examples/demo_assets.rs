@@ -1,0 +1,40 @@
+//! Writes the demo firmware's assets (`firmware/assets/intel.bin`, `firmware/assets/scans.rs`)
+//! from the Intel lab log. Run by `cargo xtask demo-assets`.
+//!
+//! Usage: `demo_assets LOG OUT_DIR`.
+
+use beamfield_tools::demo_assets::generate;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let args: Vec<PathBuf> = std::env::args_os().skip(1).map(PathBuf::from).collect();
+    let [log, out] = args.as_slice() else {
+        eprintln!("usage: demo_assets LOG OUT_DIR");
+        return ExitCode::FAILURE;
+    };
+    let work = std::env::temp_dir().join(format!("beamfield-demo-{}", std::process::id()));
+    let assets = match generate(log, &work) {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("demo_assets: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let _ = std::fs::remove_dir_all(&work);
+    let write = |name: &str, bytes: &[u8]| -> Result<(), String> {
+        let p = out.join(name);
+        std::fs::write(&p, bytes).map_err(|e| format!("{}: {e}", p.display()))?;
+        println!("wrote {} ({} bytes)", p.display(), bytes.len());
+        Ok(())
+    };
+    if let Err(e) = std::fs::create_dir_all(out)
+        .map_err(|e| format!("{}: {e}", out.display()))
+        .and_then(|()| write("intel.bin", &assets.blob))
+        .and_then(|()| write("scans.rs", assets.scans_rs.as_bytes()))
+    {
+        eprintln!("demo_assets: {e}");
+        return ExitCode::FAILURE;
+    }
+    ExitCode::SUCCESS
+}
