@@ -178,7 +178,7 @@ fn truncated_step_is_the_exact_m_step() {
         max_iterations: 1,
         tolerance_nats: 0.0,
         max_newton_passes: 60,
-        ..EmConfig::default()
+        shape_update: ShapeUpdate::TruncatedExact,
     };
     let mut trace = [0.0; 4];
     let next = fit_slices(&cfg, start, &z, &zs, &mut trace)
@@ -574,4 +574,50 @@ fn grouped_fit_recovers_per_group_weights() {
     }
     assert!((f64::from(out.sigma_hit_m) - 0.1).abs() < 0.005);
     assert!(out.intrinsics(2).is_none());
+}
+
+/// Why the EM module computes its densities in f64 rather than through the crate's f32
+/// `BeamModel::components`: measured per-beam error of the f32 log-likelihood against the
+/// reference, compared with what late EM iterations gain per beam.
+#[test]
+fn f32_components_are_too_coarse_for_late_em_steps() {
+    let mut rng = Rng(0x5EED_0002);
+    let truth = Intrinsics {
+        z_hit: 0.7,
+        z_short: 0.1,
+        z_max: 0.05,
+        z_rand: 0.15,
+        sigma_hit: 0.2,
+        lambda_short: 0.8,
+        max_range: 10.0,
+    };
+    let (z, zs) = sample_set(&mut rng, &truth, 20_000, 0.5);
+    let start = BeamIntrinsics::amcl_defaults(10.0).unwrap();
+    let mut trace = vec![0.0; 256];
+    let out = fit_slices(&EmConfig::default(), start, &z, &zs, &mut trace).unwrap();
+    let fitted = out.intrinsics;
+    let model = beamfield::BeamModel::new(fitted);
+    let p = to_ref(&fitted);
+    let (mut max_err, mut mean_f32, mut mean_ref) = (0.0f64, 0.0f64, 0.0f64);
+    for (&a, &b) in z.iter().zip(&zs) {
+        let l32 = f64::from(model.components(a, b).unwrap().mix(fitted.weights()).ln());
+        let l64 = reference::beam_log_likelihood(&p, f64::from(a), f64::from(b)).unwrap();
+        max_err = max_err.max((l32 - l64).abs());
+        mean_f32 += l32;
+        mean_ref += l64;
+    }
+    let n = z.len() as f64;
+    let mean_err = (mean_f32 - mean_ref).abs() / n;
+    let t = &trace[..out.trace_len];
+    let late_gains: Vec<f64> = t.windows(2).rev().take(5).map(|w| w[1] - w[0]).collect();
+    println!(
+        "f32 per-beam LL error: max {max_err:.2e}, on the mean {mean_err:.2e}; last EM gains \
+         per beam {late_gains:?}"
+    );
+    // The f32 mixture is accurate to single precision (≤ ~1e-6 nats per beam)...
+    assert!(max_err < 1e-5, "{max_err}");
+    // ...which is more than the last steps of EM gain: an f32 E-step could not tell them apart.
+    assert!(late_gains.iter().any(|&g| g < max_err), "{late_gains:?}");
+    // The f64 trace agrees with the reference to ~1e-13 on the mean.
+    assert!((t[t.len() - 1] - mean_ref / n).abs() < 1e-10);
 }

@@ -19,18 +19,28 @@
 //!   bias (true λ = 1 truncated at 2 m: the textbook update converges near 1.46). In σ it works on
 //!   the precision `τ = 1/σ²`, in which the hit term is concave.
 //!
-//! Because every part of the M-step never decreases its part of the expected complete
-//! log-likelihood, the truncated variant is a generalized EM and the data log-likelihood never
-//! decreases (up to f64 rounding, see below). The textbook variant reproduces the chapter's
+//! Because every part of the exact M-step never decreases its part of the expected complete
+//! log-likelihood, [`ShapeUpdate::TruncatedExact`] is a generalized EM and the data
+//! log-likelihood never decreases (up to f64 rounding, see below); [`ShapeUpdate::Truncated`]
+//! accepts a cheaper step only when the data log-likelihood shows it did not decrease, and falls
+//! back to the exact one otherwise, so it is monotone too. The textbook variant reproduces the chapter's
 //! worked example, but on some data sets it decreases the log-likelihood.
 //!
 //! # Data and passes
 //! The data are never stored: the caller supplies a re-iterable source, a closure returning a
 //! fresh iterator of `(range_m, z_star_m)` pairs (so `z*` may be cached by the caller or cast on
-//! the fly). The textbook variant makes one pass per iteration; the truncated one makes one pass
-//! for the E-step plus one per Newton evaluation (each one re-runs the E-step at the same θ and
-//! evaluates the shape terms at the candidate), typically 1–3, at most
-//! [`EmConfig::max_newton_passes`]. Everything kept between readings is a fixed set of sums.
+//! the fly). Everything kept between readings is a fixed set of sums. Passes per iteration:
+//!
+//! - [`ShapeUpdate::Textbook`] makes one.
+//! - [`ShapeUpdate::Truncated`] (default) makes about one. The E-step pass also evaluates the
+//!   derivatives of the normalized expected complete log-likelihood at the current σ and λ; one
+//!   safeguarded Newton step gives the next σ and λ (Lange's EM-gradient step, locally equivalent
+//!   to EM). The next pass, which is the next E-step anyway, checks the data log-likelihood; if it
+//!   went down, that pass is discarded and the [`ShapeUpdate::TruncatedExact`] step is taken from
+//!   the previous parameters (guaranteed by the generalized-EM argument below).
+//! - [`ShapeUpdate::TruncatedExact`] makes one E-step pass plus one per Newton evaluation (each re-runs
+//!   the E-step at the same θ and evaluates the shape terms at the candidate), typically 1–3, at
+//!   most [`EmConfig::max_newton_passes`].
 //!
 //! # Precision
 //! All accumulation and all densities here are f64 (the scoring path of [`crate::BeamModel`] is
@@ -98,10 +108,17 @@ pub enum ShapeUpdate {
     /// Table 6.2's closed forms. Reproduces the chapter's worked example; biased for truncated
     /// short readings, and not monotone on every data set.
     Textbook,
-    /// Maximize the expected complete log-likelihood with the truncation normalizers
-    /// (safeguarded Newton, accept only improvements). Monotone; unbiased λ. The default.
+    /// The default. One safeguarded Newton step per iteration on the expected complete
+    /// log-likelihood with the truncation normalizers (Lange's EM-gradient step), accepted only
+    /// if the next pass shows the data log-likelihood did not decrease; otherwise the
+    /// [`ShapeUpdate::TruncatedExact`] step is taken from the previous parameters instead.
+    /// Monotone; unbiased λ; about one pass per iteration.
     #[default]
     Truncated,
+    /// Maximize the expected complete log-likelihood with the truncation normalizers in every
+    /// iteration (safeguarded Newton to convergence, accept only evaluated improvements): an
+    /// exact (generalized) EM step. Monotone; unbiased λ; 2–4 passes per iteration.
+    TruncatedExact,
 }
 
 /// EM settings. [`EmConfig::default`] is the monotone EM with 100 iterations.
@@ -396,14 +413,14 @@ where
     let mut passes = 0u32;
     let mut iterations = 0u32;
     let mut prev_ll: Option<f64> = None;
-    let truncated = config.shape_update == ShapeUpdate::Truncated;
+    let exact = config.shape_update == ShapeUpdate::TruncatedExact;
+    let truncated = exact || config.shape_update == ShapeUpdate::Truncated;
+    let bounds = (sigma_lo, sigma_hi, lambda_lo, lambda_hi);
+    let mut proposal_from: Option<Saved<G>> = None;
     let (stop, last) = loop {
         let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
         let probe = if truncated {
-            Probe {
-                tau: Some(1.0 / (sigma * sigma)),
-                lambda: Some(lambda),
-            }
+            Probe::at(1.0 / (sigma * sigma), lambda)
         } else {
             Probe::default()
         };
@@ -414,12 +431,37 @@ where
             break (StopReason::NoData, st);
         }
         let mean_ll = st.ll / used as f64;
+        if let Some(prev) = proposal_from.take() {
+            if mean_ll < prev.mean_ll {
+                // The one-step Newton proposal lowered the likelihood: take the generalized EM
+                // step from the previous parameters instead (guaranteed not to lower it).
+                let (s, l, extra) = newton_shapes(
+                    config,
+                    &run,
+                    &prev.theta,
+                    &prev.stats,
+                    (prev.sigma, prev.lambda),
+                    bounds,
+                );
+                passes = passes.saturating_add(extra);
+                w = prev.new_weights;
+                sigma = s;
+                lambda = l;
+                continue;
+            }
+        }
         match trace.get_mut(trace_len) {
             Some(slot) => {
                 *slot = mean_ll;
                 trace_len += 1;
             }
             None => trace_dropped += 1,
+        }
+        if st.total(0) > 0.0 && sigma <= sigma_lo {
+            break (StopReason::Degenerate(Param::SigmaHit), st);
+        }
+        if st.total(1) > 0.0 && lambda >= lambda_hi {
+            break (StopReason::Degenerate(Param::LambdaShort), st);
         }
         if let Some(p) = prev_ll {
             let change = mean_ll - p;
@@ -448,15 +490,35 @@ where
         // M-step: σ and λ.
         let e_hit = st.total(0);
         let e_short = st.total(1);
-        let (new_sigma, new_lambda, extra) = if truncated {
-            newton_shapes(
-                config,
-                &run,
-                &th,
-                &st,
-                (sigma, lambda),
-                (sigma_lo, sigma_hi, lambda_lo, lambda_hi),
-            )
+        let (new_sigma, new_lambda) = if exact {
+            let (s, l, extra) = newton_shapes(config, &run, &th, &st, (sigma, lambda), bounds);
+            passes = passes.saturating_add(extra);
+            (s, l)
+        } else if truncated {
+            // One safeguarded Newton step on each (Lange's EM-gradient step), checked by the
+            // next pass; the full generalized-EM step above is the fallback.
+            let tau = 1.0 / (sigma * sigma);
+            let s = if e_hit > 0.0 {
+                let t = newton_step(tau, st.hit_curve, tau_of(sigma_hi), tau_of(sigma_lo));
+                round_f32(1.0 / crate::math::sqrt_f64(t)).clamp(sigma_lo, sigma_hi)
+            } else {
+                sigma
+            };
+            let l = if e_short > 0.0 {
+                round_f32(newton_step(lambda, st.short_curve, lambda_lo, lambda_hi))
+                    .clamp(lambda_lo, lambda_hi)
+            } else {
+                lambda
+            };
+            proposal_from = Some(Saved {
+                theta: th,
+                stats: st,
+                sigma,
+                lambda,
+                new_weights: new_w,
+                mean_ll,
+            });
+            (s, l)
         } else {
             let s = if e_hit > 0.0 {
                 round_f32(crate::math::sqrt_f64(st.hit_sq / e_hit)).clamp(sigma_lo, sigma_hi)
@@ -468,9 +530,8 @@ where
             } else {
                 lambda
             };
-            (s, l, 0)
+            (s, l)
         };
-        passes = passes.saturating_add(extra);
         iterations += 1;
         let unchanged = new_w == w && new_sigma == sigma && new_lambda == lambda;
         w = new_w;
@@ -479,20 +540,6 @@ where
         if unchanged {
             // The next pass would repeat this one exactly.
             break (StopReason::Converged, st);
-        }
-        if e_hit > 0.0 && sigma <= sigma_lo {
-            let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
-            let st = run(&th, &Probe::default());
-            passes = passes.saturating_add(1);
-            push_trace(trace, &mut trace_len, &mut trace_dropped, &st);
-            break (StopReason::Degenerate(Param::SigmaHit), st);
-        }
-        if e_short > 0.0 && lambda >= lambda_hi {
-            let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
-            let st = run(&th, &Probe::default());
-            passes = passes.saturating_add(1);
-            push_trace(trace, &mut trace_len, &mut trace_dropped, &st);
-            break (StopReason::Degenerate(Param::LambdaShort), st);
         }
     };
     Ok(GroupedFit {
@@ -515,23 +562,34 @@ where
     })
 }
 
-fn push_trace<const G: usize>(
-    trace: &mut [f64],
-    len: &mut usize,
-    dropped: &mut usize,
-    st: &PassStats<G>,
-) {
-    let used = st.used();
-    if used == 0 {
-        return;
-    }
-    match trace.get_mut(*len) {
-        Some(slot) => {
-            *slot = st.ll / used as f64;
-            *len += 1;
-        }
-        None => *dropped += 1,
-    }
+/// The parameters and E-step statistics an EM-gradient proposal was made from.
+#[derive(Clone, Copy)]
+struct Saved<const G: usize> {
+    theta: Theta<G>,
+    stats: PassStats<G>,
+    sigma: f64,
+    lambda: f64,
+    new_weights: [[f32; 4]; G],
+    mean_ll: f64,
+}
+
+/// `1/σ²`.
+fn tau_of(sigma: f64) -> f64 {
+    1.0 / (sigma * sigma)
+}
+
+/// One safeguarded Newton step for the maximum of a concave function from `x` with
+/// `[Q, Q', Q'']` there: at most a factor 4 either way, inside `[lo, hi]`.
+fn newton_step(x: f64, [_, g, h]: [f64; 3], lo: f64, hi: f64) -> f64 {
+    let cand = if h < 0.0 {
+        x - g / h
+    } else if g > 0.0 {
+        x * 4.0
+    } else {
+        x / 4.0
+    };
+    let cand = if cand.is_finite() { cand } else { x };
+    cand.clamp(x / 4.0, x * 4.0).clamp(lo, hi)
 }
 
 /// `x` rounded to the nearest f32, back in f64.
@@ -577,7 +635,6 @@ fn newton_shapes<const G: usize, R>(
 where
     R: Fn(&Theta<G>, &Probe) -> PassStats<G>,
 {
-    let tau_of = |s: f64| 1.0 / (s * s);
     // τ is rounded through σ's f32 representation.
     let round_tau = |t: f64| tau_of(round_f32(1.0 / crate::math::sqrt_f64(t)));
     let (tau_lo, tau_hi) = (tau_of(sigma_hi), tau_of(sigma_lo));
@@ -601,7 +658,7 @@ where
         if t.is_none() && l.is_none() {
             break;
         }
-        let st = run(th, &Probe { tau: t, lambda: l });
+        let st = run(th, &Probe::new(t, l));
         passes += 1;
         if let Some(t) = t {
             hs.observe(t, st.hit_curve);

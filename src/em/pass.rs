@@ -19,6 +19,10 @@ const FRAC_1_SQRT_2_F64: f64 = core::f64::consts::FRAC_1_SQRT_2;
 /// so the call is skipped without changing a bit of the result.
 const ERF_IS_ONE: f64 = 6.0;
 
+/// Below this argument `exp` is exactly 0.0 in f64 (`e^−746` is under half the smallest
+/// subnormal), so the call is skipped without changing a bit of the result.
+const EXP_IS_ZERO: f64 = -746.0;
+
 /// The current parameters with the constants derived from them, f64.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Theta<const G: usize> {
@@ -59,13 +63,57 @@ impl<const G: usize> Theta<G> {
     }
 }
 
-/// Where the shape parameters' expected complete log-likelihood is evaluated in a pass.
+/// Where the shape parameters' expected complete log-likelihood is evaluated in a pass, with the
+/// per-probe constants computed once.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Probe {
-    /// Precision `τ = 1/σ²` of the hit Gaussian, 1/m².
-    pub tau: Option<f64>,
-    /// Rate λ of the short exponential, 1/m.
-    pub lambda: Option<f64>,
+    hit: Option<HitProbe>,
+    short: Option<ShortProbe>,
+}
+
+/// Constants of a hit probe at precision `τ = 1/σ²` (1/m²).
+#[derive(Clone, Copy, Debug)]
+struct HitProbe {
+    tau: f64,
+    sqrt_tau: f64,
+    half_ln_tau: f64,
+    inv_2tau: f64,
+    inv_4tau2: f64,
+}
+
+/// Constants of a short probe at rate λ (1/m).
+#[derive(Clone, Copy, Debug)]
+struct ShortProbe {
+    lambda: f64,
+    ln_lambda: f64,
+    inv_lambda: f64,
+    inv_lambda2: f64,
+}
+
+impl Probe {
+    /// A probe at `τ` (if any) and `λ` (if any).
+    pub fn new(tau: Option<f64>, lambda: Option<f64>) -> Self {
+        Self {
+            hit: tau.map(|tau| HitProbe {
+                tau,
+                sqrt_tau: math::sqrt_f64(tau),
+                half_ln_tau: 0.5 * math::ln_f64(tau),
+                inv_2tau: 0.5 / tau,
+                inv_4tau2: 0.25 / (tau * tau),
+            }),
+            short: lambda.map(|lambda| ShortProbe {
+                lambda,
+                ln_lambda: math::ln_f64(lambda),
+                inv_lambda: 1.0 / lambda,
+                inv_lambda2: 1.0 / (lambda * lambda),
+            }),
+        }
+    }
+
+    /// A probe at both `τ` and `λ`.
+    pub fn at(tau: f64, lambda: f64) -> Self {
+        Self::new(Some(tau), Some(lambda))
+    }
 }
 
 /// `(Q, dQ/dx, d²Q/dx²)` summed over the data.
@@ -179,7 +227,8 @@ impl<const G: usize> PassStats<G> {
         for (ri, &li) in r.iter_mut().zip(&l) {
             *ri = if li == m {
                 1.0
-            } else if li == f64::NEG_INFINITY {
+            } else if li - m < EXP_IS_ZERO {
+                // exp would round to exactly 0 (this also covers li = −∞).
                 0.0
             } else {
                 math::exp_f64(li - m)
@@ -196,17 +245,17 @@ impl<const G: usize> PassStats<G> {
         let e_short = r[1] * inv_total;
         self.hit_sq += e_hit * d * d;
         self.short_z += e_short * z;
-        if let Some(tau) = probe.tau {
+        if let Some(hp) = &probe.hit {
             if e_hit > 0.0 {
-                let c = hit_curve(tau, d, s, th.zmax);
+                let c = hit_curve(hp, d, s, th.zmax);
                 for (a, b) in self.hit_curve.iter_mut().zip(c) {
                     *a += e_hit * b;
                 }
             }
         }
-        if let Some(lambda) = probe.lambda {
+        if let Some(sp) = &probe.short {
             if e_short > 0.0 {
-                let c = short_curve(lambda, z, s);
+                let c = short_curve(sp, z, s);
                 for (a, b) in self.short_curve.iter_mut().zip(c) {
                     *a += e_short * b;
                 }
@@ -238,10 +287,11 @@ fn ln_hit_mass(s: f64, zmax: f64, inv_sigma: f64) -> f64 {
     }
 }
 
-/// `φ(x)·x^0, φ(x)·x, φ(x)·x³`, standard normal density terms (0 far in the tail).
+/// `(x·φ(x), x³·φ(x))`, standard normal density terms. Beyond |x| = 10 both are below 1e-19,
+/// under an ulp of the terms (≈ 1 and ≈ 3) they are subtracted from, and are returned as 0.
 #[inline]
 fn phi_terms(x: f64) -> (f64, f64) {
-    if x * x > 1400.0 {
+    if x * x > 100.0 {
         return (0.0, 0.0);
     }
     let p = INV_SQRT_2PI_F64 * math::exp_f64(-0.5 * x * x);
@@ -261,8 +311,8 @@ fn phi_terms(x: f64) -> (f64, f64) {
 /// `E[u²] = 1 − (βφ(β) − αφ(α))/M`, `E[u⁴] = 3·E[u²] − (β³φ(β) − α³φ(α))/M`. The truncated
 /// normal with a fixed mean is an exponential family along τ, which is why ℓ is concave in τ.
 #[inline]
-pub(crate) fn hit_curve(tau: f64, d: f64, s: f64, zmax: f64) -> Curve {
-    let rt = math::sqrt_f64(tau);
+fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64) -> Curve {
+    let (tau, rt) = (hp.tau, hp.sqrt_tau);
     let alpha = -s * rt;
     let beta = (zmax - s) * rt;
     let mass = half_mass(beta) + half_mass(-alpha);
@@ -274,9 +324,9 @@ pub(crate) fn hit_curve(tau: f64, d: f64, s: f64, zmax: f64) -> Curve {
         let eu2 = 1.0 - (b1 - a1) / mass;
         (math::ln_f64(mass), eu2, 3.0 * eu2 - (b3 - a3) / mass)
     };
-    let q = 0.5 * math::ln_f64(tau) - 0.5 * tau * d * d - ln_mass;
-    let g = -0.5 * d * d + eu2 / (2.0 * tau);
-    let h = -(eu4 - eu2 * eu2) / (4.0 * tau * tau);
+    let q = hp.half_ln_tau - 0.5 * tau * d * d - ln_mass;
+    let g = -0.5 * d * d + eu2 * hp.inv_2tau;
+    let h = -(eu4 - eu2 * eu2) * hp.inv_4tau2;
     [q, g, h]
 }
 
@@ -289,13 +339,20 @@ pub(crate) fn hit_curve(tau: f64, d: f64, s: f64, zmax: f64) -> Curve {
 /// ```
 ///
 /// (concave: with `x = λz*`, `x²e^x/(e^x − 1)² = ((x/2)/sinh(x/2))² ≤ 1`).
+///
+/// `1 − e^{−x}` is formed as `(e^x − 1)/(e^x − 1 + 1)`: one `expm1`, no cancellation.
 #[inline]
-pub(crate) fn short_curve(lambda: f64, z: f64, s: f64) -> Curve {
+fn short_curve(sp: &ShortProbe, z: f64, s: f64) -> Curve {
+    let lambda = sp.lambda;
     let x = lambda * s;
     let em1 = math::expm1_f64(x);
-    let one_minus = -math::expm1_f64(-x);
-    let q = math::ln_f64(lambda) - lambda * z - math::ln_f64(one_minus);
-    let g = 1.0 / lambda - z - s / em1;
-    let h = -1.0 / (lambda * lambda) + s * s / (em1 * one_minus);
+    let one_minus = if em1.is_finite() {
+        em1 / (em1 + 1.0)
+    } else {
+        1.0
+    };
+    let q = sp.ln_lambda - lambda * z - math::ln_f64(one_minus);
+    let g = sp.inv_lambda - z - s / em1;
+    let h = -sp.inv_lambda2 + s * s / (em1 * one_minus);
     [q, g, h]
 }

@@ -120,3 +120,37 @@ impl Solver {
         self.best_x
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Q(x) = a·ln x − b·x`, concave, maximum at `a/b`: the solver reaches it from either side
+    /// and far away, and never returns a point worse than its start.
+    #[test]
+    fn finds_the_maximum_of_a_concave_function() {
+        let cases: [(f64, f64, f64); 4] = [
+            (1.0, 2.0, 0.01),
+            (1.0, 2.0, 40.0),
+            (3.0, 0.5, 6.0),
+            (5.0, 1e3, 1.0),
+        ];
+        for (a, b, x0) in cases {
+            let curve = |x: f64| [a * x.ln() - b * x, a / x - b, -a / (x * x)];
+            let mut s = Solver::new(x0, curve(x0), 1e-9, 1e9);
+            for _ in 0..60 {
+                match s.propose(|x| x, 1e-9, 1e9) {
+                    Some(x) => s.observe(x, curve(x)),
+                    None => break,
+                }
+            }
+            let want = a / b;
+            assert!(
+                (s.best() - want).abs() < 1e-8 * want,
+                "{a} {b} {x0}: {}",
+                s.best()
+            );
+            assert!(curve(s.best())[0] >= curve(x0)[0]);
+        }
+    }
+}
