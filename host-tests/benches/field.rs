@@ -93,7 +93,7 @@ fn likelihood(c: &mut Criterion) {
             Pose::new(
                 (lcg(&mut s) * 4.0 - 2.0) as f32,
                 (lcg(&mut s) * 4.0 - 2.0) as f32,
-                (lcg(&mut s) * 6.28 - 3.14) as f32,
+                ((lcg(&mut s) - 0.5) * std::f64::consts::TAU) as f32,
             )
         })
         .collect();

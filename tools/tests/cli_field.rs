@@ -1,0 +1,100 @@
+//! `beamfield field …` end to end: build, query (with a bad line), render, and a missing file.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+
+fn data_dir() -> PathBuf {
+    if let Some(p) = std::env::var_os("BEAMFIELD_DATA") {
+        return PathBuf::from(p);
+    }
+    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    loop {
+        let c = dir.join("shared").join("data");
+        if c.join("README.md").is_file() {
+            return c;
+        }
+        assert!(dir.pop(), "shared/data not found; set BEAMFIELD_DATA");
+    }
+}
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_beamfield"))
+}
+
+#[test]
+fn build_query_render() {
+    let out = std::env::temp_dir().join(format!("beamfield-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let blob = out.join("tb3.bin");
+    let map = data_dir().join("map_turtlebot3_world/map.yaml");
+    let st = bin()
+        .args(["--json", "field", "build"])
+        .arg(&map)
+        .arg("-o")
+        .arg(&blob)
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
+    assert_eq!(report["width"], 384);
+    assert_eq!(report["occupied_cells"], 795);
+    assert_eq!(report["bytes"], 48 + 384 * 384);
+
+    let mut child = bin()
+        .args(["field", "query"])
+        .arg(&blob)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Cell (0, 0) is unknown, far from the arena: clamped at d_max; (-20, -10) is 10 m off
+    // the map's left edge: d_max + 10 m.
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"-9.975,-9.975\nbad line\n-20,-10\n")
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "a bad line must fail the run");
+    let stdout = String::from_utf8(o.stdout).unwrap();
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines, ["-9.975,-9.975,2", "-20,-10,12"]);
+    assert!(String::from_utf8(o.stderr).unwrap().contains("line 2:"));
+
+    let png = out.join("tb3.png");
+    let st = bin()
+        .args(["field", "render"])
+        .arg(&blob)
+        .arg("-o")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(st.status.success());
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (384, 384));
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn missing_map_is_a_clear_error() {
+    let st = bin()
+        .args([
+            "field",
+            "build",
+            "/nonexistent/map.yaml",
+            "-o",
+            "/tmp/x.bin",
+        ])
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    let err = String::from_utf8(st.stderr).unwrap();
+    assert!(err.contains("cannot read /nonexistent/map.yaml"), "{err}");
+}
