@@ -3,6 +3,7 @@
 //! `beamfield` crate; this crate reads maps and logs, and writes blobs, reports and pictures.
 pub mod calibrate;
 pub mod plot;
+pub mod pose_grid;
 
 pub mod field_cmd;
 pub mod map;
