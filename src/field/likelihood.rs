@@ -35,6 +35,7 @@
 use super::blob::CODE_MAX;
 use super::view::FieldView;
 use crate::math;
+use crate::model::{SensorModel, Stride};
 use crate::pose::Pose;
 use crate::scan::{BeamLayout, Scan, ScanScore};
 
@@ -280,6 +281,20 @@ impl<'a> LikelihoodField<'a> {
         layout: &BeamLayout<N>,
         scan: &Scan<N>,
         pose: &Pose,
+        each: F,
+    ) -> ScanScore {
+        self.score_strided_with(layout, scan, pose, Stride::ONE, each)
+    }
+
+    /// As [`LikelihoodField::score_with`], over beams `0, s, 2s, …` only (`s = stride`). Beams
+    /// left out are neither scored, counted nor passed to `each`; `unpaired` still counts every
+    /// reading past the layout's end.
+    pub fn score_strided_with<const N: usize, F: FnMut(usize, f32)>(
+        &self,
+        layout: &BeamLayout<N>,
+        scan: &Scan<N>,
+        pose: &Pose,
+        stride: Stride,
         mut each: F,
     ) -> ScanScore {
         let sensor = layout.mount().sensor_pose(pose);
@@ -295,7 +310,13 @@ impl<'a> LikelihoodField<'a> {
         let (mut scored, mut max_range) = (0u32, 0u32);
         let ranges = scan.ranges_m();
         let mut paired = 0u32;
-        for (k, (beam, &r)) in layout.beams().iter().zip(ranges).enumerate() {
+        for (k, (beam, &r)) in layout
+            .beams()
+            .iter()
+            .zip(ranges)
+            .enumerate()
+            .step_by(stride.get())
+        {
             let ux = c * beam.cos - s * beam.sin;
             let uy = s * beam.cos + c * beam.sin;
             let idx = self.view.table_index(ax + r * ux, ay + r * uy);
@@ -343,6 +364,19 @@ impl<'a> LikelihoodField<'a> {
                 *slot = d;
             }
         })
+    }
+}
+
+impl<const N: usize> SensorModel<N> for LikelihoodField<'_> {
+    /// [`LikelihoodField::score_strided_with`] without the per-beam callback.
+    fn score_strided(
+        &self,
+        layout: &BeamLayout<N>,
+        scan: &Scan<N>,
+        pose: &Pose,
+        stride: Stride,
+    ) -> ScanScore {
+        self.score_strided_with(layout, scan, pose, stride, |_, _| {})
     }
 }
 

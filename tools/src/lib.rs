@@ -2,7 +2,10 @@
 //! rather than on the microcontroller. The device-side formats and models live in the
 //! `beamfield` crate; this crate reads maps and logs, and writes blobs, reports and pictures.
 pub mod calibrate;
+pub mod heat_map;
 pub mod plot;
+pub mod pose_grid;
+pub mod score_cmd;
 
 pub mod field_cmd;
 pub mod map;

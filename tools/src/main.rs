@@ -22,6 +22,12 @@ enum Command {
     /// Distance-field blobs for the likelihood field: build one from a ROS map, query it,
     /// render it as a picture.
     Field(beamfield_tools::field_cmd::FieldArgs),
+    /// Log-likelihood of one scan of a CARMEN log at a pose (likelihood field over a blob),
+    /// optionally a score surface around it (--grid: CSV and PNG).
+    Score(beamfield_tools::score_cmd::ScoreArgs),
+    /// The smallest tempering κ whose credible sets over a local pose grid hold the logged
+    /// poses at the requested rate; coverage at κ = 1 and at κ, and a coverage-vs-κ PNG.
+    Calibrate(beamfield_tools::score_cmd::CalibrateArgs),
     /// Ultrasonic ring tools (firing schedules and crosstalk).
     #[command(subcommand)]
     Sonar(beamfield_tools::sonar::SonarCommand),
@@ -58,6 +64,14 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::Score(args) => print_or_fail(
+            "score",
+            beamfield_tools::score_cmd::run_score(&args, cli.json),
+        ),
+        Command::Calibrate(args) => print_or_fail(
+            "calibrate",
+            beamfield_tools::score_cmd::run_calibrate(&args, cli.json),
+        ),
         Command::Sonar(cmd) => match beamfield_tools::sonar::run(&cmd, cli.json) {
             Ok(out) => {
                 println!("{out}");
@@ -70,5 +84,21 @@ fn main() -> ExitCode {
         },
         Command::Map { command } => beamfield_tools::carmen_cli::run_map(command, cli.json),
         Command::Log { command } => beamfield_tools::carmen_cli::run_log(command, cli.json),
+    }
+}
+
+fn print_or_fail(
+    name: &str,
+    r: Result<String, beamfield_tools::score_cmd::ScoreCmdError>,
+) -> ExitCode {
+    match r {
+        Ok(out) => {
+            println!("{out}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("beamfield {name}: {e}");
+            ExitCode::FAILURE
+        }
     }
 }

@@ -21,7 +21,8 @@ fn err<E: std::fmt::Display>(e: E) -> PlotError {
     PlotError(e.to_string())
 }
 
-fn register_fonts() {
+/// Registers the embedded DejaVu Sans as "sans-serif" for plotters (once per process).
+pub fn register_fonts() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // Registration fails only on a corrupt font, which would be a build defect.

@@ -1,0 +1,480 @@
+//! `beamfield score` and `beamfield calibrate`: the likelihood field on the scans of a CARMEN
+//! log, at one pose, over a local pose grid, and κ calibration (models.md §5).
+//!
+//! The FLASER pose is the laser's pose, so scans are scored with a centred mount and poses are
+//! laser poses (metres, radians in the map frame).
+
+use crate::calibrate::{calibrate, Calibration};
+use crate::carmen::{CarmenLog, LogError, ReadOptions};
+use crate::plot::{line_chart, LineChart, Series};
+use crate::pose_grid::{argmax, posterior_sd, score_grid, GridSpec};
+use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
+use beamfield::{BeamLayout, Pose, Scan, SensorModel, SensorMount, Tempered};
+use clap::Args;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Beam capacity of the scans these commands read (CARMEN FLASER scans have 180 or 361).
+pub const MAX_BEAMS: usize = 1081;
+
+/// Likelihood-field parameters shared by both commands.
+#[derive(Args, Debug, Clone)]
+pub struct ModelArgs {
+    /// The distance-field blob (`beamfield field build`).
+    #[arg(long)]
+    pub field: PathBuf,
+    /// The CARMEN log (FLASER lines with poses).
+    #[arg(long)]
+    pub log: PathBuf,
+    /// σ_hit of the likelihood field, metres.
+    #[arg(long = "sigma-hit", default_value_t = 0.05)]
+    pub sigma_hit: f32,
+    /// z_hit weight.
+    #[arg(long = "z-hit", default_value_t = 0.95)]
+    pub z_hit: f32,
+    /// z_rand weight.
+    #[arg(long = "z-rand", default_value_t = 0.05)]
+    pub z_rand: f32,
+}
+
+/// `beamfield score`: log-likelihood of one scan of a log at a pose.
+#[derive(Args, Debug)]
+pub struct ScoreArgs {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Index of the scan in the log (0-based, FLASER lines in file order).
+    #[arg(long)]
+    scan: usize,
+    /// Laser pose "X,Y,THETA" (metres, metres, radians); default: the logged pose.
+    #[arg(long, allow_hyphen_values = true)]
+    pose: Option<String>,
+    /// Tempering κ (the log-likelihood is divided by it).
+    #[arg(long, default_value_t = 1.0)]
+    kappa: f32,
+    /// Also score an x–y grid at the pose's θ and a θ profile, writing PREFIX.csv,
+    /// PREFIX-xy.png and PREFIX-theta.png.
+    #[arg(long, value_name = "PREFIX")]
+    grid: Option<PathBuf>,
+    /// Grid half-width in x and y, metres.
+    #[arg(long = "grid-half", default_value_t = 0.2)]
+    grid_half: f64,
+    /// Grid step in x and y, metres.
+    #[arg(long = "grid-step", default_value_t = 0.005)]
+    grid_step: f64,
+    /// θ profile half-width, degrees (step 0.25°).
+    #[arg(long = "grid-half-deg", default_value_t = 10.0)]
+    grid_half_deg: f64,
+}
+
+/// `beamfield calibrate`: the smallest κ whose credible sets hold the logged poses.
+#[derive(Args, Debug)]
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    model: ModelArgs,
+    /// Requested coverage of the credible sets (their level).
+    #[arg(long, default_value_t = 0.95)]
+    coverage: f64,
+    /// Number of scans, spread evenly over the log.
+    #[arg(long, default_value_t = 60)]
+    scans: usize,
+    /// Grid half-width in x and y, metres.
+    #[arg(long = "half-xy", default_value_t = 0.08)]
+    half_xy: f64,
+    /// Grid step in x and y, metres.
+    #[arg(long = "step-xy", default_value_t = 0.004)]
+    step_xy: f64,
+    /// Grid half-width in θ, degrees.
+    #[arg(long = "half-deg", default_value_t = 2.0)]
+    half_deg: f64,
+    /// Grid step in θ, degrees.
+    #[arg(long = "step-deg", default_value_t = 0.1)]
+    step_deg: f64,
+    /// Write a PNG of coverage against κ.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+/// Errors of `score` and `calibrate`.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum ScoreCmdError {
+    /// The blob could not be read.
+    Io(PathBuf, std::io::Error),
+    /// The blob is malformed.
+    Blob(beamfield::field::BlobError),
+    /// The log could not be read.
+    Log(LogError),
+    /// A bad option value.
+    Usage(String),
+    /// The plot could not be drawn.
+    Plot(String),
+}
+
+impl std::fmt::Display for ScoreCmdError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Blob(e) => write!(f, "bad field blob: {e}"),
+            Self::Log(e) => write!(f, "{e}"),
+            Self::Usage(m) => f.write_str(m),
+            Self::Plot(m) => write!(f, "plot: {m}"),
+        }
+    }
+}
+
+impl std::error::Error for ScoreCmdError {}
+
+fn usage(m: impl Into<String>) -> ScoreCmdError {
+    ScoreCmdError::Usage(m.into())
+}
+
+struct Loaded {
+    blob: Vec<u8>,
+    log: CarmenLog,
+    params: LikelihoodParams,
+    layout: BeamLayout<MAX_BEAMS>,
+}
+
+fn load(m: &ModelArgs) -> Result<Loaded, ScoreCmdError> {
+    let blob = std::fs::read(&m.field).map_err(|e| ScoreCmdError::Io(m.field.clone(), e))?;
+    FieldView::parse(&blob).map_err(ScoreCmdError::Blob)?;
+    let log = CarmenLog::read_path(&m.log, ReadOptions::default()).map_err(ScoreCmdError::Log)?;
+    let max_range = log
+        .max_range
+        .value_m()
+        .ok_or_else(|| usage("the log's max range could not be detected"))?;
+    let params = LikelihoodParams::new(m.z_hit, m.z_rand, m.sigma_hit, max_range)
+        .map_err(|e| usage(format!("likelihood field parameters: {e}")))?;
+    let layout = log
+        .layout_with_mount(SensorMount::CENTERED)
+        .map_err(|e| usage(format!("beam layout of the log: {e}")))?;
+    Ok(Loaded {
+        blob,
+        log,
+        params,
+        layout,
+    })
+}
+
+fn scan_of(log: &CarmenLog, i: usize) -> Result<(Scan<MAX_BEAMS>, Pose), ScoreCmdError> {
+    let s = log
+        .scans
+        .get(i)
+        .ok_or_else(|| usage(format!("scan {i}: the log has {} scans", log.scans.len())))?;
+    let scan = s
+        .to_scan()
+        .map_err(|e| usage(format!("scan {i} (line {}): {e}", s.line)))?;
+    Ok((scan, s.pose))
+}
+
+fn parse_pose(text: &str) -> Result<Pose, ScoreCmdError> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| usage(format!("--pose {text:?}: expected X,Y,THETA (numbers)")))?;
+    match v.as_slice() {
+        [x, y, t] if v.iter().all(|a| a.is_finite()) => Ok(Pose::new(*x, *y, *t)),
+        _ => Err(usage(format!(
+            "--pose {text:?}: expected three finite numbers"
+        ))),
+    }
+}
+
+/// Runs `beamfield score`; returns the text (or JSON) to print.
+///
+/// # Errors
+/// [`ScoreCmdError`] for unreadable inputs, bad options or a failed plot.
+pub fn run_score(a: &ScoreArgs, json: bool) -> Result<String, ScoreCmdError> {
+    let l = load(&a.model)?;
+    let lf = LikelihoodField::new(
+        FieldView::parse(&l.blob).map_err(ScoreCmdError::Blob)?,
+        l.params,
+    );
+    let model = Tempered::new(lf, a.kappa, 1).map_err(|e| usage(format!("--kappa: {e}")))?;
+    let (scan, logged) = scan_of(&l.log, a.scan)?;
+    let pose = match &a.pose {
+        Some(t) => parse_pose(t)?,
+        None => logged,
+    };
+    let s = model.score(&l.layout, &scan, &pose);
+    let mut out = String::new();
+    let mut files = Vec::new();
+    if let Some(prefix) = &a.grid {
+        files = write_grid(a, &model, &l.layout, &scan, &pose, prefix)?;
+    }
+    if json {
+        out = serde_json::json!({
+            "scan": a.scan,
+            "pose": [pose.x_m, pose.y_m, pose.theta_rad],
+            "logged_pose": [logged.x_m, logged.y_m, logged.theta_rad],
+            "kappa": a.kappa,
+            "log_likelihood": s.log_likelihood,
+            "scored": s.scored,
+            "max_range": s.max_range,
+            "invalid": s.invalid,
+            "unpaired": s.unpaired,
+            "files": files,
+        })
+        .to_string();
+    } else {
+        let _ = writeln!(
+            out,
+            "scan {} at ({:.3} m, {:.3} m, {:.4} rad), κ = {}: log-likelihood {:.3} nats",
+            a.scan, pose.x_m, pose.y_m, pose.theta_rad, a.kappa, s.log_likelihood
+        );
+        let _ = write!(
+            out,
+            "beams: {} scored, {} max-range skipped, {} invalid, {} unpaired",
+            s.scored, s.max_range, s.invalid, s.unpaired
+        );
+        for f in &files {
+            let _ = write!(out, "\nwrote {f}");
+        }
+    }
+    Ok(out)
+}
+
+/// The x–y surface at θ and the θ profile at (x, y): a CSV (`dx_m,dy_m,dtheta_rad,log_likelihood`)
+/// and two PNGs.
+fn write_grid<M: SensorModel<MAX_BEAMS>>(
+    a: &ScoreArgs,
+    model: &M,
+    layout: &BeamLayout<MAX_BEAMS>,
+    scan: &Scan<MAX_BEAMS>,
+    pose: &Pose,
+    prefix: &Path,
+) -> Result<Vec<String>, ScoreCmdError> {
+    if !(a.grid_step > 0.0 && a.grid_half >= a.grid_step && a.grid_half / a.grid_step <= 500.0) {
+        return Err(usage(
+            "--grid-step must be > 0 and at most --grid-half, with ≤ 500 steps per side",
+        ));
+    }
+    if !(a.grid_half_deg > 0.0 && a.grid_half_deg <= 180.0) {
+        return Err(usage("--grid-half-deg must be in (0, 180]"));
+    }
+    let xy = GridSpec {
+        half_xy_m: a.grid_half,
+        step_xy_m: a.grid_step,
+        half_theta_rad: 0.0,
+        step_theta_rad: 1.0,
+    };
+    let th = GridSpec {
+        half_xy_m: 0.0,
+        step_xy_m: 1.0,
+        half_theta_rad: a.grid_half_deg.to_radians(),
+        step_theta_rad: 0.25f64.to_radians(),
+    };
+    let gxy = score_grid(model, layout, scan, pose, &xy);
+    let gth = score_grid(model, layout, scan, pose, &th);
+    let mut csv = String::from("dx_m,dy_m,dtheta_rad,log_likelihood\n");
+    for (spec, g) in [(&xy, &gxy), (&th, &gth)] {
+        for (i, l) in g.log_likelihood.iter().enumerate() {
+            let (dx, dy, dt) = spec.offset(i);
+            let _ = writeln!(csv, "{dx:.4},{dy:.4},{dt:.5},{l:.4}");
+        }
+    }
+    let name = |suffix: &str| {
+        let mut s = prefix.as_os_str().to_owned();
+        s.push(suffix);
+        PathBuf::from(s)
+    };
+    let csv_path = name(".csv");
+    std::fs::write(&csv_path, csv).map_err(|e| ScoreCmdError::Io(csv_path.clone(), e))?;
+    let png_xy = name("-xy.png");
+    crate::heat_map::heat_map(
+        &png_xy,
+        &format!(
+            "log-likelihood around ({:.2}, {:.2}) m at θ = {:.3} rad",
+            pose.x_m, pose.y_m, pose.theta_rad
+        ),
+        xy.dims().0,
+        a.grid_half,
+        &gxy.log_likelihood,
+    )
+    .map_err(|e| ScoreCmdError::Plot(e.0))?;
+    let png_th = name("-theta.png");
+    let pts = gth
+        .log_likelihood
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (th.offset(i).2.to_degrees(), *l))
+        .collect();
+    line_chart(
+        &png_th,
+        &LineChart {
+            title: "log-likelihood against heading offset",
+            x_label: "θ offset (degrees)",
+            y_label: "log-likelihood (nats)",
+            x_log: false,
+            h_lines: vec![],
+            v_lines: vec![(0.0, "given θ".into())],
+            series: vec![Series {
+                name: "scan".into(),
+                points: pts,
+            }],
+        },
+    )
+    .map_err(|e| ScoreCmdError::Plot(e.0))?;
+    Ok([csv_path, png_xy, png_th]
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect())
+}
+
+/// Runs `beamfield calibrate`; progress goes to stderr. Returns the text (or JSON) to print.
+///
+/// # Errors
+/// [`ScoreCmdError`] for unreadable inputs, bad options or a failed plot.
+pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdError> {
+    if !(a.coverage > 0.0 && a.coverage < 1.0) {
+        return Err(usage("--coverage must be in (0, 1)"));
+    }
+    if a.scans == 0 {
+        return Err(usage("--scans must be at least 1"));
+    }
+    let spec = GridSpec {
+        half_xy_m: a.half_xy,
+        step_xy_m: a.step_xy,
+        half_theta_rad: a.half_deg.to_radians(),
+        step_theta_rad: a.step_deg.to_radians(),
+    };
+    let ok = |h: f64, s: f64| s > 0.0 && h >= s && h / s <= 200.0;
+    if !(ok(a.half_xy, a.step_xy) && ok(a.half_deg, a.step_deg)) {
+        return Err(usage(
+            "grid: steps must be > 0 and at most the half-widths, ≤ 200 steps per side",
+        ));
+    }
+    let l = load(&a.model)?;
+    let lf = LikelihoodField::new(
+        FieldView::parse(&l.blob).map_err(ScoreCmdError::Blob)?,
+        l.params,
+    );
+    let total = l.log.scans.len();
+    if total == 0 {
+        return Err(usage("the log has no scans"));
+    }
+    let n = a.scans.min(total);
+    let mut grids = Vec::with_capacity(n);
+    let mut sd_sum = (0.0, 0.0, 0.0);
+    let mut peak_err = Vec::with_capacity(n);
+    for j in 0..n {
+        let i = j * total / n;
+        let (scan, pose) = scan_of(&l.log, i)?;
+        let g = score_grid(&lf, &l.layout, &scan, &pose, &spec);
+        let sd = posterior_sd(&g, &spec, 1.0);
+        sd_sum = (sd_sum.0 + sd.0, sd_sum.1 + sd.1, sd_sum.2 + sd.2);
+        if let Some(b) = argmax(&g.log_likelihood) {
+            let (dx, dy, _) = spec.offset(b);
+            peak_err.push((dx * dx + dy * dy).sqrt());
+        }
+        grids.push(g);
+        eprint!(
+            "\rcalibrate: scan {}/{n} ({} poses each)",
+            j + 1,
+            spec.len()
+        );
+    }
+    eprintln!();
+    let cal = calibrate(&grids, a.coverage);
+    let nf = n as f64;
+    let sd_k1 = (sd_sum.0 / nf, sd_sum.1 / nf, sd_sum.2 / nf);
+    let sd_at = |k: f64| {
+        let s = grids
+            .iter()
+            .map(|g| posterior_sd(g, &spec, k))
+            .fold((0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+        (s.0 / nf, s.1 / nf, s.2 / nf)
+    };
+    let sd_kappa = cal.kappa.map(sd_at);
+    peak_err.sort_by(f64::total_cmp);
+    let median_peak = peak_err.get(peak_err.len() / 2).copied().unwrap_or(0.0);
+    if let Some(path) = &a.output {
+        plot_curve(path, &cal)?;
+    }
+    if json {
+        return Ok(serde_json::json!({
+            "calibration": cal,
+            "grid": spec,
+            "mean_posterior_sd_at_kappa_1": [sd_k1.0, sd_k1.1, sd_k1.2],
+            "mean_posterior_sd_at_kappa": sd_kappa.map(|s| [s.0, s.1, s.2]),
+            "median_peak_distance_m": median_peak,
+        })
+        .to_string());
+    }
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{n} scans of {total}; grid ±{:.2} m / {:.3} m in x and y, ±{}° / {}° in θ ({} poses)",
+        a.half_xy,
+        a.step_xy,
+        a.half_deg,
+        a.step_deg,
+        spec.len()
+    );
+    let _ = writeln!(
+        out,
+        "coverage of the {:.0} % credible set at κ = 1: {:.3}",
+        a.coverage * 100.0,
+        cal.coverage_at_1
+    );
+    match (cal.kappa, cal.coverage_at_kappa) {
+        (Some(k), Some(c)) => {
+            let _ = writeln!(out, "κ = {k:.2}: coverage {c:.3}");
+        }
+        _ => {
+            let _ = writeln!(out, "no κ ≤ 1000 reaches the requested coverage");
+        }
+    }
+    let _ = write!(
+        out,
+        "mean posterior sd at κ = 1: x {:.1} mm, y {:.1} mm, θ {:.2}° ({:.1}, {:.1}, {:.1} grid cells)",
+        sd_k1.0 * 1e3,
+        sd_k1.1 * 1e3,
+        sd_k1.2.to_degrees(),
+        sd_k1.0 / a.step_xy,
+        sd_k1.1 / a.step_xy,
+        sd_k1.2.to_degrees() / a.step_deg
+    );
+    if let (Some(k), Some(s)) = (cal.kappa, sd_kappa) {
+        let _ = write!(
+            out,
+            "\nmean posterior sd at κ = {k:.2}: x {:.1} mm, y {:.1} mm, θ {:.2}°",
+            s.0 * 1e3,
+            s.1 * 1e3,
+            s.2.to_degrees()
+        );
+    }
+    let _ = write!(
+        out,
+        "\nmedian distance of the grid's best pose from the logged one: {:.1} cm",
+        median_peak * 100.0
+    );
+    if let Some(p) = &a.output {
+        let _ = write!(out, "\nwrote {}", p.display());
+    }
+    Ok(out)
+}
+
+fn plot_curve(path: &Path, cal: &Calibration) -> Result<(), ScoreCmdError> {
+    let mut v_lines = Vec::new();
+    if let Some(k) = cal.kappa {
+        v_lines.push((k, format!("κ = {k:.2}")));
+    }
+    line_chart(
+        path,
+        &LineChart {
+            title: "coverage of the credible set against tempering κ",
+            x_label: "κ",
+            y_label: "fraction of logged poses inside",
+            x_log: true,
+            h_lines: vec![(cal.level, format!("requested {:.2}", cal.level))],
+            v_lines,
+            series: vec![Series {
+                name: format!("{} scans", cal.scans),
+                points: cal.curve.clone(),
+            }],
+        },
+    )
+    .map_err(|e| ScoreCmdError::Plot(e.0))
+}
