@@ -115,3 +115,9 @@ pub extern "C" fn bench_mark_end() {
     cortex_m::asm::nop();
     cortex_m::asm::nop();
 }
+
+/// The models program's cases, generated on the host (`cargo xtask modelcases`).
+#[allow(missing_docs, clippy::all)]
+pub mod model_cases {
+    include!("model_cases.rs");
+}

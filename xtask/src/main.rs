@@ -80,7 +80,14 @@ enum Task {
         #[arg(long)]
         check: bool,
     },
-    /// The firmware part of CI: refcases --check, cross, qemu, insns.
+    /// Regenerate firmware/src/model_cases.rs (the models program's cases) from the host.
+    Modelcases {
+        /// Only check that the checked-in file is up to date (exit 1 if not).
+        #[arg(long)]
+        check: bool,
+    },
+    /// The firmware part of CI: refcases --check, modelcases --check, cross, qemu (check and
+    /// models), insns.
     Ci,
 }
 
@@ -95,9 +102,12 @@ fn main() -> ExitCode {
         Task::Insns { machine } => insns(&machine),
         Task::Cross => cross(),
         Task::Refcases { check } => refcases(check),
+        Task::Modelcases { check } => modelcases(check),
         Task::Ci => refcases(true)
+            .and_then(|()| modelcases(true))
             .and_then(|()| cross())
             .and_then(|()| qemu("check", "mps2-an386", true))
+            .and_then(|()| qemu("models", "mps2-an386", true))
             .and_then(|()| insns("mps2-an386")),
     };
     match result {
@@ -468,6 +478,25 @@ fn refcases(check: bool) -> Result {
     if check {
         return Err(format!(
             "{} is stale: run `cargo xtask refcases` and commit it",
+            path.display()
+        ));
+    }
+    fs::write(&path, want).map_err(|e| format!("{}: {e}", path.display()))?;
+    eprintln!("xtask: wrote {}", path.display());
+    Ok(())
+}
+
+fn modelcases(check: bool) -> Result {
+    let path = repo_root().join(host_tests::firmware_models::GENERATED_PATH);
+    let want = host_tests::firmware_models::render();
+    let have = fs::read_to_string(&path).unwrap_or_default();
+    if have == want {
+        eprintln!("xtask: {} is up to date", path.display());
+        return Ok(());
+    }
+    if check {
+        return Err(format!(
+            "{} is stale: run `cargo xtask modelcases` and commit it",
             path.display()
         ));
     }
