@@ -102,8 +102,11 @@ pub fn room_blob() -> Vec<u8> {
     out
 }
 
-/// The room scan: an f64 ray cast from the true pose plus a fixed ±1 cm pattern; beam 5 reads
-/// +∞ (no return) and beam 17 NaN (a driver glitch).
+/// The room scan: an f64 ray cast from the true pose plus a fixed pattern of 1.1–1.7 cm offsets;
+/// beam 5 reads +∞ (no return) and beam 17 NaN (a driver glitch).
+///
+/// The ray cast stops on a cell boundary, so an unperturbed endpoint lies exactly between two
+/// cells and f32 and f64 may pick different ones; every offset is at least 0.22 cell.
 pub fn room_scan() -> Vec<f32> {
     let g = room_grid();
     (0..ROOM_BEAMS)
@@ -123,7 +126,8 @@ pub fn room_scan() -> Vec<f32> {
                 8.0,
             )
             .unwrap_or(8.0);
-            (r + 0.01 * (((k * 7) % 5) as f64 - 2.0) / 2.0) as f32
+            const OFFSETS_M: [f64; 5] = [0.012, -0.013, 0.017, -0.011, 0.014];
+            (r + OFFSETS_M[(k * 7) % 5]) as f32
         })
         .collect()
 }
@@ -140,8 +144,11 @@ pub fn room_layout() -> BeamLayout<ROOM_BEAMS> {
     .expect("room layout")
 }
 
-/// Landmark cases: `(feature [r, φ, s], landmark [x, y, s], pose [x, y, θ], noise [σr, σφ, σs])`.
-pub const LANDMARK_CASES: [([f32; 3], [f32; 3], [f32; 3], [f32; 3]); 5] = [
+/// One landmark case: `(feature [r, φ, s], landmark [x, y, s], pose [x, y, θ], noise [σr, σφ, σs])`.
+pub type LandmarkCase = ([f32; 3], [f32; 3], [f32; 3], [f32; 3]);
+
+/// The landmark cases.
+pub const LANDMARK_CASES: [LandmarkCase; 5] = [
     (
         [4.0, 0.7, 3.0],
         [3.0, 4.0, 3.0],

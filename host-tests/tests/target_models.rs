@@ -43,7 +43,26 @@ fn tempered_room_scores_match_the_f64_reference() {
                 // to ~1e-7 rad, far below a cell at these ranges.
                 let x = f64::from(p[0]) + r * a.cos();
                 let y = f64::from(p[1]) + r * a.sin();
-                let (d_quantized, _) = expected_distance(&g, &seeds, x, y, 1.0);
+                // The blob's code of the nearest on-map cell, plus the off-map distance rounded
+                // to whole code steps, clamped at code 255 (documented in src/field/view.rs:
+                // the term table is indexed by code, so the off-map charge is quantized too).
+                let (gx, gy) = ((x - g.origin.0) / g.res, (y - g.origin.1) / g.res);
+                let (cx, cy) = (
+                    gx.clamp(0.0, g.width as f64),
+                    gy.clamp(0.0, g.height as f64),
+                );
+                let off_m = ((gx - cx).powi(2) + (gy - cy).powi(2)).sqrt() * g.res;
+                let on_map = (g.origin.0 + cx * g.res, g.origin.1 + cy * g.res);
+                let (d_cell, _) = expected_distance(
+                    &g,
+                    &seeds,
+                    on_map.0.min(g.origin.0 + (g.width as f64 - 0.5) * g.res),
+                    on_map.1.min(g.origin.1 + (g.height as f64 - 0.5) * g.res),
+                    1.0,
+                );
+                let step = 1.0 / 255.0;
+                let code = (d_cell / step).round() + (off_m / step).round();
+                let d_quantized = code.min(255.0) * step;
                 sum += lf_term(
                     d_quantized,
                     f64::from(zh),
