@@ -59,8 +59,35 @@ const KAPPA: f32 = 10.0;
 const ACCEPT_M: f32 = 0.05;
 /// Acceptance (issue 7): heading error, degrees.
 const ACCEPT_DEG: f32 = 1.0;
-/// Instructions per SysTick tick under `-icount shift=0` on mps2-an386 (target.md).
-const INSNS_PER_TICK: u64 = 40;
+/// The SysTick (core) clock, Hz: 25 MHz on mps2-an386 (the default); `cargo xtask demo --board
+/// netduinoplus2` sets `BEAMFIELD_CORE_HZ` to QEMU's STM32F405 clock. Under `-icount shift=0`
+/// one instruction is one nanosecond, so a tick is `1e9 / CORE_HZ` instructions (40 on
+/// mps2-an386, target.md).
+const CORE_HZ: u64 = match option_env!("BEAMFIELD_CORE_HZ") {
+    Some(s) => parse_u64(s),
+    None => 25_000_000,
+};
+
+/// Decimal digits to an integer at compile time (a non-digit fails the build).
+const fn parse_u64(s: &str) -> u64 {
+    let b = s.as_bytes();
+    let mut i = 0;
+    let mut n = 0u64;
+    while i < b.len() {
+        assert!(
+            b[i].is_ascii_digit(),
+            "BEAMFIELD_CORE_HZ must be decimal digits"
+        );
+        n = n * 10 + (b[i] - b'0') as u64;
+        i += 1;
+    }
+    n
+}
+
+/// Instructions in `ticks` SysTick ticks under `-icount shift=0`.
+const fn insns(ticks: u64) -> u64 {
+    ticks * 1_000_000_000 / CORE_HZ
+}
 /// SysTick reload: the full 24 bits.
 const SYST_RELOAD: u32 = 0x00FF_FFFF;
 
@@ -194,16 +221,16 @@ fn main() -> ! {
             POSES,
             Fixed::new(f64::from(lag1.correlation().unwrap_or(f32::NAN)), 2),
             score.scored,
-            ticks * INSNS_PER_TICK / POSES as u64,
+            insns(ticks) / POSES as u64,
             if ok { "ok" } else { "FAIL" }
         );
     }
     let poses = (SCANS.len() * POSES) as u64;
     println!(
         "overall: {} insns per pose, {} per scored beam slot ({} beams), every best pose within {} cm and {} deg: {}",
-        total_ticks * INSNS_PER_TICK / poses,
+        insns(total_ticks) / poses,
         Fixed::new(
-            (total_ticks * INSNS_PER_TICK) as f64 / (poses * BEAMS as u64) as f64,
+            insns(total_ticks) as f64 / (poses * BEAMS as u64) as f64,
             1
         ),
         BEAMS,
