@@ -1,6 +1,8 @@
 //! `cargo xtask`: project tasks that need more than `cargo test`: the firmware under QEMU,
 //! instruction counts, cross builds. Run `cargo xtask --help`.
 
+mod demo;
+
 use clap::{Parser, Subcommand};
 use std::collections::BTreeMap;
 use std::fs::{self, File};
@@ -74,6 +76,18 @@ enum Task {
     /// Build the library for every bare-metal target, without and with each feature and with
     /// all of them; then link the firmware with each optional feature (proof: no allocator).
     Cross,
+    /// Run the pose-scoring demo (firmware/src/bin/demo.rs) under QEMU and print its report.
+    ///
+    /// Installs the rustup target if missing; says how to install qemu-system-arm if missing.
+    /// Exits 0 only if every embedded real scan's best pose is within 5 cm and 1° of the
+    /// logged pose.
+    Demo {
+        /// Board (QEMU machine and memory layout).
+        #[arg(long, value_enum, default_value = "mps2-an386")]
+        board: demo::Board,
+    },
+    /// Regenerate firmware/assets/ (Intel map blob and scans) from ../shared/data.
+    DemoAssets,
     /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
     Refcases {
         /// Only check that the checked-in file is up to date (exit 1 if not).
@@ -101,6 +115,8 @@ fn main() -> ExitCode {
         } => qemu(&bin, &machine, !debug),
         Task::Insns { machine } => insns(&machine),
         Task::Cross => cross(),
+        Task::Demo { board } => demo::demo(board),
+        Task::DemoAssets => demo::demo_assets(),
         Task::Refcases { check } => refcases(check),
         Task::Modelcases { check } => modelcases(check),
         Task::Ci => refcases(true)

@@ -1,0 +1,242 @@
+//! The demo a user flashes: pose scoring with the tempered likelihood field on real Intel-lab
+//! scans, against a distance-field blob of the Intel map linked into flash.
+//!
+//! For each embedded scan (`firmware/assets/scans.rs`, standing in for the sensor driver) it
+//! scores a grid of pose hypotheses around the logged pose (±20 cm in 5 cm steps, ±5° in 1°
+//! steps: 9 × 9 × 11 = 891 poses), normalizes the weights in place, and reports the best pose,
+//! its offset from the logged pose, the effective sample size, the lag-1 diagnostic at the best
+//! pose and the instructions per pose (SysTick on the core clock; under QEMU's
+//! `-icount shift=0` one tick of mps2-an386's 25 MHz clock is 40 instructions).
+//!
+//! Exits 0 only if every best pose is within 5 cm and 1° of the logged one (issue 7), else 1.
+//! Output is integers and fixed decimals ([`Fixed`]), so no `core::fmt` float code is linked.
+//!
+//! Assets: `cargo xtask demo-assets` regenerates `firmware/assets/` from the log;
+//! `tools/tests/demo_assets.rs` checks that the checked-in files match.
+#![no_std]
+#![no_main]
+
+use beamfield::{
+    normalize_log_weights, BeamLayout, FieldView, Lag1, LikelihoodField, LikelihoodParams, Pose,
+    Scan, SensorMount,
+};
+use beamfield_firmware::{exit, println, Fixed};
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_rt::entry;
+use panic_semihosting as _;
+
+/// One real scan of the log with its logged (corrected) laser pose.
+pub struct DemoScan {
+    /// Index of the FLASER line in the log.
+    pub log_index: u32,
+    /// Logged laser pose `[x_m, y_m, theta_rad]`.
+    pub pose: [f32; 3],
+    /// The 180 ranges, metres (the log's max-range value means "no return").
+    pub ranges_m: [f32; BEAMS],
+}
+
+/// Beams per FLASER scan of the Intel log.
+const BEAMS: usize = 180;
+
+include!("../../assets/scans.rs");
+
+/// The 5 cm distance field of the Intel map (see `docs/demo.md`).
+static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
+
+/// Hypotheses per axis in x and y: offsets −20 … +20 cm in 5 cm steps.
+const XY_STEPS: usize = 9;
+/// Spacing of the position grid, metres.
+const XY_STEP_M: f32 = 0.05;
+/// Hypotheses in heading: −5° … +5° in 1° steps.
+const TH_STEPS: usize = 11;
+/// Spacing of the heading grid, degrees.
+const TH_STEP_DEG: f32 = 1.0;
+/// Pose hypotheses per scan.
+const POSES: usize = XY_STEPS * XY_STEPS * TH_STEPS;
+/// Tempering κ: `ln q = (1/κ)·Σ ln p` (models.md §5). A demo value, not calibrated.
+const KAPPA: f32 = 10.0;
+/// Acceptance (issue 7): position error, metres.
+const ACCEPT_M: f32 = 0.05;
+/// Acceptance (issue 7): heading error, degrees.
+const ACCEPT_DEG: f32 = 1.0;
+/// The SysTick (core) clock, Hz: 25 MHz on mps2-an386 (the default); `cargo xtask demo --board
+/// netduinoplus2` sets `BEAMFIELD_CORE_HZ` to QEMU's STM32F405 clock. Under `-icount shift=0`
+/// one instruction is one nanosecond, so a tick is `1e9 / CORE_HZ` instructions (40 on
+/// mps2-an386, target.md).
+const CORE_HZ: u64 = match option_env!("BEAMFIELD_CORE_HZ") {
+    Some(s) => parse_u64(s),
+    None => 25_000_000,
+};
+
+/// Decimal digits to an integer at compile time (a non-digit fails the build).
+const fn parse_u64(s: &str) -> u64 {
+    let b = s.as_bytes();
+    let mut i = 0;
+    let mut n = 0u64;
+    while i < b.len() {
+        assert!(
+            b[i].is_ascii_digit(),
+            "BEAMFIELD_CORE_HZ must be decimal digits"
+        );
+        n = n * 10 + (b[i] - b'0') as u64;
+        i += 1;
+    }
+    n
+}
+
+/// Instructions in `ticks` SysTick ticks under `-icount shift=0`.
+const fn insns(ticks: u64) -> u64 {
+    ticks * 1_000_000_000 / CORE_HZ
+}
+/// SysTick reload: the full 24 bits.
+const SYST_RELOAD: u32 = 0x00FF_FFFF;
+
+/// The hypothesis `i` of the grid around `centre`.
+fn hypothesis(centre: &Pose, i: usize) -> Pose {
+    let half_xy = (XY_STEPS / 2) as f32;
+    let half_th = (TH_STEPS / 2) as f32;
+    let ix = (i % XY_STEPS) as f32 - half_xy;
+    let iy = ((i / XY_STEPS) % XY_STEPS) as f32 - half_xy;
+    let it = (i / (XY_STEPS * XY_STEPS)) as f32 - half_th;
+    Pose::new(
+        centre.x_m + ix * XY_STEP_M,
+        centre.y_m + iy * XY_STEP_M,
+        beamfield::wrap_angle(centre.theta_rad + (it * TH_STEP_DEG).to_radians()),
+    )
+}
+
+/// Ticks elapsed between two reads of the down-counting SysTick value.
+fn ticks_between(start: u32, end: u32) -> u32 {
+    start.wrapping_sub(end) & SYST_RELOAD
+}
+
+#[entry]
+fn main() -> ! {
+    let Some(mut cp) = cortex_m::Peripherals::take() else {
+        println!("demo: core peripherals taken twice");
+        exit(false)
+    };
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(SYST_RELOAD);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
+
+    let view = match FieldView::parse(BLOB) {
+        Ok(v) => v,
+        Err(e) => {
+            println!("demo: map blob rejected: {}", e);
+            exit(false)
+        }
+    };
+    let params = match LikelihoodParams::amcl_defaults(MAX_RANGE_M) {
+        Ok(p) => p,
+        Err(e) => {
+            println!("demo: likelihood parameters rejected: {}", e);
+            exit(false)
+        }
+    };
+    let field = LikelihoodField::new(view, params);
+    // CARMEN FLASER: 180 beams from −90° in 1° steps; the laser poses are logged, so no mount
+    // offset.
+    let layout = match BeamLayout::<BEAMS>::uniform(
+        -core::f32::consts::FRAC_PI_2,
+        core::f32::consts::PI / BEAMS as f32,
+        BEAMS,
+        MAX_RANGE_M,
+        SensorMount::CENTERED,
+    ) {
+        Ok(l) => l,
+        Err(e) => {
+            println!("demo: beam layout rejected: {}", e);
+            exit(false)
+        }
+    };
+    println!(
+        "beamfield demo: Intel lab map {}x{} cells at {} m ({} bytes of flash), {} real scans of {} beams",
+        field.view().width(),
+        field.view().height(),
+        Fixed::new(f64::from(field.view().cell_size_m()), 2),
+        BLOB.len(),
+        SCANS.len(),
+        BEAMS
+    );
+    println!(
+        "hypotheses per scan: {} (x, y: +-{} m step {} m; heading: +-{} deg step {} deg), tempered likelihood field, kappa {}",
+        POSES,
+        Fixed::new(f64::from(XY_STEP_M) * (XY_STEPS / 2) as f64, 2),
+        Fixed::new(f64::from(XY_STEP_M), 2),
+        Fixed::new(f64::from(TH_STEP_DEG) * (TH_STEPS / 2) as f64, 0),
+        Fixed::new(f64::from(TH_STEP_DEG), 0),
+        Fixed::new(f64::from(KAPPA), 1)
+    );
+
+    let mut weights = [0.0f32; POSES];
+    let mut all_ok = true;
+    let mut total_ticks = 0u64;
+    for demo in SCANS.iter() {
+        let logged = Pose::new(demo.pose[0], demo.pose[1], demo.pose[2]);
+        let Ok(scan) = Scan::<BEAMS>::from_ranges(&demo.ranges_m) else {
+            println!("scan {}: rejected", demo.log_index);
+            all_ok = false;
+            continue;
+        };
+        let inv_kappa = 1.0 / KAPPA;
+        let t0 = cortex_m::peripheral::SYST::get_current();
+        for (i, w) in weights.iter_mut().enumerate() {
+            let pose = hypothesis(&logged, i);
+            *w = field.score(&layout, &scan, &pose).log_likelihood * inv_kappa;
+        }
+        let t1 = cortex_m::peripheral::SYST::get_current();
+        let ticks = u64::from(ticks_between(t0, t1));
+        total_ticks += ticks;
+        let norm = match normalize_log_weights(&mut weights) {
+            Ok(n) => n,
+            Err(e) => {
+                println!("scan {}: weights not normalizable: {}", demo.log_index, e);
+                all_ok = false;
+                continue;
+            }
+        };
+        let best = hypothesis(&logged, norm.best);
+        // Residuals at the best pose: the endpoint's distance to the nearest obstacle.
+        let mut lag1 = Lag1::new();
+        let score = field.score_with(&layout, &scan, &best, |_, d| lag1.push(d));
+        let dx = best.x_m - logged.x_m;
+        let dy = best.y_m - logged.y_m;
+        let d_m = beamfield::math::sqrt(dx * dx + dy * dy);
+        let dth_deg = beamfield::wrap_angle(best.theta_rad - logged.theta_rad).to_degrees();
+        let ok = d_m <= ACCEPT_M + 1e-4 && dth_deg.abs() <= ACCEPT_DEG + 1e-3;
+        all_ok &= ok;
+        let best_w = weights.get(norm.best).copied().unwrap_or(0.0);
+        println!(
+            "scan {}: best ({}, {}, {} deg) offset {} cm {} deg; weight {} ESS {} of {}; lag-1 {} over {} beams; {} insns/pose; {}",
+            demo.log_index,
+            Fixed::new(f64::from(best.x_m), 3),
+            Fixed::new(f64::from(best.y_m), 3),
+            Fixed::new(f64::from(best.theta_rad.to_degrees()), 1),
+            Fixed::new(f64::from(d_m) * 100.0, 1),
+            Fixed::new(f64::from(dth_deg), 1),
+            Fixed::new(f64::from(best_w), 3),
+            Fixed::new(f64::from(norm.ess), 1),
+            POSES,
+            Fixed::new(f64::from(lag1.correlation().unwrap_or(f32::NAN)), 2),
+            score.scored,
+            insns(ticks) / POSES as u64,
+            if ok { "ok" } else { "FAIL" }
+        );
+    }
+    let poses = (SCANS.len() * POSES) as u64;
+    println!(
+        "overall: {} insns per pose, {} per scored beam slot ({} beams), every best pose within {} cm and {} deg: {}",
+        insns(total_ticks) / poses,
+        Fixed::new(
+            insns(total_ticks) as f64 / (poses * BEAMS as u64) as f64,
+            1
+        ),
+        BEAMS,
+        Fixed::new(f64::from(ACCEPT_M) * 100.0, 0),
+        Fixed::new(f64::from(ACCEPT_DEG), 0),
+        if all_ok { "yes" } else { "NO" }
+    );
+    exit(all_ok)
+}

@@ -1,0 +1,107 @@
+//! `cargo xtask demo` and `cargo xtask demo-assets`: the pose-scoring demo under QEMU on one of
+//! two boards, and the regeneration of its checked-in assets.
+
+use super::{capture, ensure_qemu, ensure_target, repo_root, run, run_to_files, show, Result};
+use super::{cargo, FIRMWARE_TARGET, QEMU_TIMEOUT_S};
+use std::path::PathBuf;
+use std::process::Command;
+
+/// A board the demo runs on: QEMU machine, memory layout, SysTick clock.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Board {
+    /// ARM MPS2+ AN386: Cortex-M4F, 4 MiB code, 4 MiB SRAM, 25 MHz (the repository's memory.x).
+    #[value(name = "mps2-an386")]
+    Mps2An386,
+    /// STM32F405 (Netduino Plus 2): 1 MiB flash, 128 KiB of its SRAM used (memory-stm32f405.x).
+    #[value(name = "netduinoplus2")]
+    Netduinoplus2,
+}
+
+impl Board {
+    fn machine(self) -> &'static str {
+        match self {
+            Board::Mps2An386 => "mps2-an386",
+            Board::Netduinoplus2 => "netduinoplus2",
+        }
+    }
+    fn memory_x(self) -> PathBuf {
+        repo_root().join(match self {
+            Board::Mps2An386 => "memory.x",
+            Board::Netduinoplus2 => "memory-stm32f405.x",
+        })
+    }
+    /// SysTick's clock in QEMU's model of the board, Hz.
+    fn core_hz(self) -> u64 {
+        match self {
+            Board::Mps2An386 => 25_000_000,
+            Board::Netduinoplus2 => 168_000_000,
+        }
+    }
+}
+
+/// Builds `firmware/src/bin/demo.rs` (release) for `board` and runs it under QEMU, printing its
+/// report; fails unless it exits 0.
+pub fn demo(board: Board) -> Result {
+    ensure_qemu()?;
+    ensure_target(FIRMWARE_TARGET)?;
+    let mut cmd = cargo();
+    cmd.current_dir(repo_root().join("firmware"))
+        .env("BEAMFIELD_MEMORY_X", board.memory_x())
+        .env("BEAMFIELD_CORE_HZ", board.core_hz().to_string())
+        .args([
+            "build",
+            "--release",
+            "--target",
+            FIRMWARE_TARGET,
+            "--bin",
+            "demo",
+            "--message-format=json-render-diagnostics",
+        ]);
+    eprintln!("+ (cd firmware && {})", show(&cmd));
+    let out = capture(&mut cmd)?;
+    let elf = out
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|m| m["reason"] == "compiler-artifact" && m["target"]["name"] == "demo")
+        .find_map(|m| m["executable"].as_str().map(PathBuf::from))
+        .ok_or("cargo built no `demo` executable")?;
+    let machine = board.machine();
+    let (code, out, err) = run_to_files(
+        Command::new("timeout")
+            .args([QEMU_TIMEOUT_S, "qemu-system-arm", "-machine", machine])
+            .args([
+                "-nographic",
+                "-semihosting-config",
+                "enable=on,target=native",
+            ])
+            .args(["-icount", "shift=0", "-kernel"])
+            .arg(&elf),
+        "demo",
+    )?;
+    print!("{out}");
+    eprint!("{err}");
+    match code {
+        0 => Ok(()),
+        124 => Err(format!("the demo did not finish within {QEMU_TIMEOUT_S} s")),
+        134 => Err(format!("QEMU stopped with a CPU lockup on `{machine}`")),
+        c => Err(format!(
+            "the demo exited {c} under QEMU ({machine}): a best pose is off"
+        )),
+    }
+}
+
+/// Regenerates `firmware/assets/` from the Intel lab log beside the repository.
+pub fn demo_assets() -> Result {
+    let root = repo_root();
+    run(cargo().current_dir(&root).args([
+        "run",
+        "--release",
+        "-p",
+        "beamfield-tools",
+        "--example",
+        "demo_assets",
+        "--",
+        "../shared/data/laser_intel_lab/intel-corrected.log",
+        "firmware/assets",
+    ]))
+}
