@@ -22,6 +22,8 @@ enum Command {
     /// Distance-field blobs for the likelihood field: build one from a ROS map, query it,
     /// render it as a picture.
     Field(beamfield_tools::field_cmd::FieldArgs),
+    /// Fit the beam model's intrinsics (EM) to a CARMEN log, z* ray cast through a blob.
+    Fit(beamfield_tools::beam_fit::FitArgs),
     /// Ultrasonic ring tools (firing schedules and crosstalk).
     #[command(subcommand)]
     Sonar(beamfield_tools::sonar::SonarCommand),
@@ -43,6 +45,16 @@ fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("beamfield field: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Command::Fit(args) => match beamfield_tools::beam_fit::run(&args, cli.json) {
+            Ok(out) => {
+                println!("{out}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("beamfield fit: {e}");
                 ExitCode::FAILURE
             }
         },
