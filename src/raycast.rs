@@ -129,8 +129,8 @@ impl<'a> RayCaster<'a> {
         let (ty0, ty1) = slab(oy, inv_y, self.height_f);
         let t_in = tx0.max(ty0).max(0.0);
         let t_end = tx1.min(ty1).min(range_cells);
-        // `!(a < b)` also catches NaN.
-        if !(t_in < t_end) {
+        // Finite inputs (checked above) give no NaN here: an infinite `inv` takes the branch in `slab`.
+        if t_in >= t_end {
             return None;
         }
         let last_ix = self.view.width().saturating_sub(1);
@@ -173,7 +173,7 @@ impl<'a> RayCaster<'a> {
                 let safe = f32::from(code) * self.step_cells - self.jump_margin_cells;
                 if safe > JUMP_MIN_CELLS {
                     t += safe;
-                    if !(t < t_end) {
+                    if t >= t_end {
                         return None;
                     }
                     continue 'restart;
@@ -194,7 +194,7 @@ impl<'a> RayCaster<'a> {
                     ix += step_x;
                     iy += step_y;
                 }
-                if !(t < t_end) {
+                if t >= t_end {
                     return None;
                 }
             }
