@@ -81,3 +81,69 @@ fn intel_within_one_cell() {
     let m = map_from_log(&log, log.max_range.value_m().unwrap()).unwrap();
     check("intel", &m, 20_000, 3);
 }
+
+/// `BeamFieldModel` on real Intel scans at their logged poses equals the beam mixture scored
+/// with z* from the exact host cast, and `fit_log` gives a non-decreasing trace and simplex
+/// weights.
+#[test]
+fn intel_scan_scores_and_fit() {
+    use beamfield::{BeamFieldModel, BeamIntrinsics, BeamModel, Pose, SensorModel};
+    use beamfield_tools::beam_fit::{fit_log, FitArgs, LambdaUpdate};
+    let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
+    let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
+    let max = log.max_range.value_m().unwrap();
+    let m = map_from_log(&log, max).unwrap();
+    let blob = build_blob(&m, DEFAULT_MAX_DIST_M).unwrap();
+    let view = FieldView::parse(&blob).unwrap();
+    let intr = BeamIntrinsics::amcl_defaults(max).unwrap();
+    let model = BeamFieldModel::new(BeamModel::new(intr), RayCaster::new(view).unwrap());
+    let layout = log.layout::<180>().unwrap();
+    for scan in log.scans.iter().step_by(91) {
+        let pose = Pose {
+            x_m: scan.pose.x_m,
+            y_m: scan.pose.y_m,
+            theta_rad: scan.pose.theta_rad,
+        };
+        let s = scan.to_scan::<180>().unwrap();
+        let got = model.score(&layout, &s, &pose);
+        let z_star: Vec<f32> = layout
+            .beams()
+            .iter()
+            .map(|b| {
+                ray_cast_grid(
+                    &m,
+                    f64::from(pose.x_m),
+                    f64::from(pose.y_m),
+                    f64::from(pose.theta_rad) + f64::from(b.bearing_rad),
+                    f64::from(max),
+                )
+            })
+            .collect();
+        let want = BeamModel::new(intr).scan_log_likelihood(&s, &z_star);
+        assert_eq!(got.scored, want.scored);
+        let rel =
+            (got.log_likelihood - want.log_likelihood).abs() / want.log_likelihood.abs().max(1.0);
+        assert!(
+            rel < 1e-3,
+            "{} vs {}",
+            got.log_likelihood,
+            want.log_likelihood
+        );
+    }
+    let args = FitArgs {
+        field: "unused".into(),
+        log: path,
+        iterations: 24,
+        lambda: LambdaUpdate::Truncated,
+        scans: Some((0, 200)),
+        stride: 2,
+        max_range: None,
+    };
+    let r = fit_log(view, &log, &args, |_, _| {}).unwrap();
+    let w = r.fit.intrinsics.weights();
+    assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-4 && w.iter().all(|&x| x >= 0.0));
+    assert!(r.fit.intrinsics.sigma_hit_m().is_finite());
+    assert!(r.fit.intrinsics.lambda_short_per_m().is_finite());
+    assert!(r.trace.len() >= 2);
+    assert!(r.largest_decrease() <= 1e-12, "{}", r.largest_decrease());
+}
