@@ -2,6 +2,7 @@
 #![cfg_attr(not(test), no_std)]
 
 pub mod beam;
+pub mod beam_field;
 pub mod diagnostic;
 pub mod em;
 pub mod field;
@@ -11,11 +12,13 @@ pub mod landmark;
 pub mod math;
 pub mod model;
 pub mod pose;
+pub mod raycast;
 pub mod scan;
 pub mod sonar;
 pub mod tempered;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
+pub use beam_field::BeamFieldModel;
 pub use diagnostic::Lag1;
 pub use field::{
     edt_scratch_len, emit_blob, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError,
@@ -28,6 +31,7 @@ pub use landmark::{
 };
 pub use model::{SensorModel, Stride};
 pub use pose::{wrap_angle, Pose, SensorMount};
+pub use raycast::{RayCastError, RayCaster};
 pub use scan::{Beam, BeamLayout, Reading, Scan, ScanError, ScanScore};
 pub use tempered::{
     effective_sample_size, normalize_log_weights, NormalizeError, Normalized, TemperError, Tempered,

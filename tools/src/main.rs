@@ -28,6 +28,8 @@ enum Command {
     /// The smallest tempering κ whose credible sets over a local pose grid hold the logged
     /// poses at the requested rate; coverage at κ = 1 and at κ, and a coverage-vs-κ PNG.
     Calibrate(beamfield_tools::score_cmd::CalibrateArgs),
+    /// Fit the beam model's intrinsics (EM) to a CARMEN log, z* ray cast through a blob.
+    Fit(beamfield_tools::beam_fit::FitArgs),
     /// Ultrasonic ring tools (firing schedules and crosstalk).
     #[command(subcommand)]
     Sonar(beamfield_tools::sonar::SonarCommand),
@@ -72,6 +74,16 @@ fn main() -> ExitCode {
             "calibrate",
             beamfield_tools::score_cmd::run_calibrate(&args, cli.json),
         ),
+        Command::Fit(args) => match beamfield_tools::beam_fit::run(&args, cli.json) {
+            Ok(out) => {
+                println!("{out}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("beamfield fit: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Sonar(cmd) => match beamfield_tools::sonar::run(&cmd, cli.json) {
             Ok(out) => {
                 println!("{out}");

@@ -1,0 +1,101 @@
+//! [`BeamFieldModel`]: the beam model (Thrun Table 6.1) scored on the device, with each beam's
+//! `z*` ray cast through the distance-field blob ([`crate::raycast`]).
+//!
+//! For a pose `x = (x, y, θ)` and the [`SensorMount`](crate::SensorMount) `(x_s, y_s, θ_s)`,
+//! beam `k` (bearing `θ_k`) is cast from the sensor's position along `θ + θ_s + θ_k` up to the
+//! intrinsics' `z_max`, and the reading is scored with [`BeamModel::beam_log_likelihood`]
+//! against that range: the mixture of `p_hit`, `p_short`, `p_max`, `p_rand`, in nats. Max-range
+//! readings are scored (the point mass `z_max`), NaN and negative readings are skipped and
+//! counted. The sensor pose needs one `sin_cos` per pose; bearings' unit vectors come from the
+//! [`BeamLayout`], so no trigonometry per beam.
+
+use crate::beam::{saturating_u16, BeamModel};
+use crate::math;
+use crate::model::{SensorModel, Stride};
+use crate::pose::Pose;
+use crate::raycast::RayCaster;
+use crate::scan::{BeamLayout, Scan, ScanScore};
+
+/// The beam model over a blob: a [`BeamModel`] and a [`RayCaster`]. Immutable; one value scores
+/// every pose hypothesis.
+#[derive(Clone, Copy, Debug)]
+pub struct BeamFieldModel<'a> {
+    model: BeamModel,
+    caster: RayCaster<'a>,
+}
+
+impl<'a> BeamFieldModel<'a> {
+    /// Pairs a beam model with a ray caster (both validated already).
+    pub fn new(model: BeamModel, caster: RayCaster<'a>) -> Self {
+        Self { model, caster }
+    }
+
+    /// The beam mixture.
+    pub fn model(&self) -> &BeamModel {
+        &self.model
+    }
+
+    /// The ray caster.
+    pub fn caster(&self) -> &RayCaster<'a> {
+        &self.caster
+    }
+
+    /// Writes `z*` (metres, `≤ z_max`) of every `stride`-th beam of `layout` at `pose` into
+    /// `z_star_m[k]` (entries of skipped beams and past the layout are left alone; a shorter
+    /// slice receives what fits). The EM tools cast once per beam with this.
+    pub fn cast_layout<const N: usize>(
+        &self,
+        layout: &BeamLayout<N>,
+        pose: &Pose,
+        stride: Stride,
+        z_star_m: &mut [f32],
+    ) {
+        let sensor = layout.mount().sensor_pose(pose);
+        let (s, c) = math::sin_cos(sensor.theta_rad);
+        let max = self.model.intrinsics().max_range_m();
+        for (beam, out) in layout
+            .beams()
+            .iter()
+            .zip(z_star_m.iter_mut())
+            .step_by(stride.get())
+        {
+            let ux = c * beam.cos - s * beam.sin;
+            let uy = s * beam.cos + c * beam.sin;
+            *out = self.caster.cast_dir(sensor.x_m, sensor.y_m, ux, uy, max);
+        }
+    }
+}
+
+impl<const N: usize> SensorModel<N> for BeamFieldModel<'_> {
+    /// Casts and scores beams `0, s, 2s, …`. Every valid reading, max-range ones included, is
+    /// counted in `scored`; readings past the layout are `unpaired`.
+    fn score_strided(
+        &self,
+        layout: &BeamLayout<N>,
+        scan: &Scan<N>,
+        pose: &Pose,
+        stride: Stride,
+    ) -> ScanScore {
+        let sensor = layout.mount().sensor_pose(pose);
+        let (s, c) = math::sin_cos(sensor.theta_rad);
+        let max = self.model.intrinsics().max_range_m();
+        let ranges = scan.ranges_m();
+        let mut score = ScanScore::default();
+        let mut sum = 0.0f32;
+        for (beam, &z) in layout.beams().iter().zip(ranges).step_by(stride.get()) {
+            let ux = c * beam.cos - s * beam.sin;
+            let uy = s * beam.cos + c * beam.sin;
+            let z_star = self.caster.cast_dir(sensor.x_m, sensor.y_m, ux, uy, max);
+            match self.model.beam_log_likelihood(z, z_star) {
+                Some(l) => {
+                    sum += l;
+                    score.scored = score.scored.saturating_add(1);
+                }
+                None => score.invalid = score.invalid.saturating_add(1),
+            }
+        }
+        score.log_likelihood = sum;
+        score.unpaired = saturating_u16(ranges.len().saturating_sub(layout.len()));
+        score
+    }
+}

@@ -1,0 +1,379 @@
+//! `beamfield fit`: fit the beam model's intrinsics (Thrun Table 6.2, the crate's EM) to a
+//! CARMEN log with known poses, `z*` ray cast through a distance-field blob exactly as the
+//! device does it ([`beamfield::RayCaster`]). Also the map helpers the tests and benches share.
+
+use crate::carmen::{CarmenLog, LogError, ReadOptions};
+use crate::map::{Occupancy, OccupancyMap};
+use crate::mapping::{
+    build_from_log, Cell, GridGeometry, MappingError, MappingOptions, OccupancyGrid, OccupiedCells,
+};
+use beamfield::em::{fit_slices, EmConfig, EmError, EmFit, ShapeUpdate, StopReason};
+use beamfield::field::{BlobError, FieldView};
+use beamfield::{
+    BeamFieldModel, BeamIntrinsics, BeamModel, IntrinsicsError, Param, Pose, RayCastError,
+    RayCaster, Stride,
+};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Largest number of beams per scan `fit` reads (a `Scan`/`BeamLayout` capacity).
+pub const FIT_MAX_BEAMS: usize = 1440;
+
+/// The map_server thresholds used to turn a log-built log-odds grid into a trinary map.
+pub const OCCUPIED_THRESH: f64 = 0.65;
+/// See [`OCCUPIED_THRESH`].
+pub const FREE_THRESH: f64 = 0.196;
+
+impl OccupiedCells for OccupancyMap {
+    fn geometry(&self) -> GridGeometry {
+        GridGeometry {
+            width: self.width as usize,
+            height: self.height as usize,
+            resolution_m: self.resolution_m,
+            origin_x_m: self.origin_x_m,
+            origin_y_m: self.origin_y_m,
+        }
+    }
+
+    fn is_occupied(&self, col: usize, row: usize) -> bool {
+        self.cells.get(row * self.width as usize + col) == Some(&Occupancy::Occupied)
+    }
+}
+
+/// The trinary grid of the mapping code as a loaded map (same cells, same geometry).
+pub fn grid_to_map(grid: &OccupancyGrid) -> OccupancyMap {
+    let g = grid.geometry();
+    OccupancyMap {
+        width: g.width as u32,
+        height: g.height as u32,
+        resolution_m: g.resolution_m,
+        origin_x_m: g.origin_x_m,
+        origin_y_m: g.origin_y_m,
+        cells: grid
+            .cells()
+            .iter()
+            .map(|c| match c {
+                Cell::Occupied => Occupancy::Occupied,
+                Cell::Free => Occupancy::Free,
+                Cell::Unknown => Occupancy::Unknown,
+            })
+            .collect(),
+    }
+}
+
+/// A map built from a log's own poses (the defaults of [`MappingOptions`], 5 cm cells,
+/// map_server's thresholds), as `beamfield map from-log` would write it.
+///
+/// # Errors
+/// [`MappingError`] from the mapping code.
+pub fn map_from_log(log: &CarmenLog, max_range_m: f32) -> Result<OccupancyMap, MappingError> {
+    let (lo, _) = build_from_log(log, &MappingOptions::new(max_range_m), |_, _| {})?;
+    Ok(grid_to_map(&lo.to_occupancy(OCCUPIED_THRESH, FREE_THRESH)))
+}
+
+/// `--lambda`: which σ/λ M-step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum LambdaUpdate {
+    /// Table 6.2's closed forms (biased λ for truncated data; not monotone on every data set).
+    Textbook,
+    /// Truncation-aware, monotone M-step (the default).
+    Truncated,
+}
+
+/// `beamfield fit`: EM for the beam model's intrinsics on a log.
+///
+/// Casts z* once per beam from the logged laser poses through the blob (as the device would),
+/// then runs EM over the (z, z*) pairs starting from AMCL's defaults. Prints the fitted
+/// intrinsics under their AMCL parameter names, the trace (mean log-likelihood per beam after
+/// each M-step, nats), why EM stopped and the time taken. Progress goes to stderr.
+#[derive(Args, Debug)]
+pub struct FitArgs {
+    /// The distance-field blob of the map (`beamfield field build`).
+    #[arg(long)]
+    pub field: PathBuf,
+    /// The CARMEN log (FLASER lines with corrected poses).
+    #[arg(long)]
+    pub log: PathBuf,
+    /// Largest number of EM iterations (M-steps).
+    #[arg(long, default_value_t = 100)]
+    pub iterations: u32,
+    /// The σ/λ update: `truncated` (monotone, unbiased λ) or `textbook` (Table 6.2).
+    #[arg(long, value_enum, default_value_t = LambdaUpdate::Truncated)]
+    pub lambda: LambdaUpdate,
+    /// Scans to use, `A..B` (0-based, B excluded); default all.
+    #[arg(long, value_parser = parse_range)]
+    pub scans: Option<(usize, usize)>,
+    /// Use every S-th beam of each scan.
+    #[arg(long, default_value_t = 1)]
+    pub stride: usize,
+    /// The sensor's max-range value, metres (default: detected in the log).
+    #[arg(long = "max-range")]
+    pub max_range: Option<f32>,
+}
+
+fn parse_range(s: &str) -> Result<(usize, usize), String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("`{s}`: expected A..B"))?;
+    let a: usize = a.trim().parse().map_err(|e| format!("`{a}`: {e}"))?;
+    let b: usize = b.trim().parse().map_err(|e| format!("`{b}`: {e}"))?;
+    if a >= b {
+        return Err(format!("`{s}`: empty range"));
+    }
+    Ok((a, b))
+}
+
+/// Anything that can go wrong in `beamfield fit`.
+#[derive(Debug)]
+pub enum FitError {
+    /// Reading the blob file.
+    Io(PathBuf, std::io::Error),
+    /// The blob is invalid.
+    Blob(PathBuf, BlobError),
+    /// The blob cannot be ray cast.
+    RayCast(RayCastError),
+    /// Reading the log.
+    Log(LogError),
+    /// The log has no max-range value and none was given, or it is invalid.
+    Intrinsics(IntrinsicsError),
+    /// The log has no scans in the range, or scans longer than [`FIT_MAX_BEAMS`].
+    Scans(String),
+    /// `--stride 0`.
+    BadStride,
+    /// EM refused to run.
+    Em(EmError),
+}
+
+impl std::fmt::Display for FitError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Blob(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::RayCast(e) => write!(f, "blob cannot be ray cast: {e}"),
+            Self::Log(e) => write!(f, "{e}"),
+            Self::Intrinsics(e) => write!(f, "start intrinsics: {e}"),
+            Self::Scans(e) => write!(f, "{e}"),
+            Self::BadStride => f.write_str("--stride must be >= 1"),
+            Self::Em(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for FitError {}
+
+/// The result of [`fit_log`].
+#[derive(Clone, Debug)]
+pub struct FitReport {
+    /// EM's result.
+    pub fit: EmFit,
+    /// The trace (mean log-likelihood per used beam after 0, 1, … M-steps, nats).
+    pub trace: Vec<f64>,
+    /// Scans used.
+    pub scans: usize,
+    /// (z, z*) pairs handed to EM.
+    pub pairs: usize,
+    /// Time to cast every z*, seconds.
+    pub cast_s: f64,
+    /// Time EM took, seconds.
+    pub em_s: f64,
+}
+
+impl FitReport {
+    /// The largest decrease between consecutive trace entries (0 when it never decreases).
+    pub fn largest_decrease(&self) -> f64 {
+        self.trace
+            .windows(2)
+            .map(|w| w[0] - w[1])
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Casts z* for the chosen scans and beams, then runs EM from AMCL's defaults.
+///
+/// # Errors
+/// [`FitError`] for a bad stride, scans that do not fit, an EM configuration error.
+pub fn fit_log(
+    view: FieldView<'_>,
+    log: &CarmenLog,
+    args: &FitArgs,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<FitReport, FitError> {
+    let stride = Stride::new(args.stride).ok_or(FitError::BadStride)?;
+    let max_range_m = args
+        .max_range
+        .or(log.max_range.value_m())
+        .ok_or(FitError::Intrinsics(IntrinsicsError::NonFinite(
+            Param::MaxRange,
+        )))?;
+    let start = BeamIntrinsics::amcl_defaults(max_range_m).map_err(FitError::Intrinsics)?;
+    let caster = RayCaster::new(view).map_err(FitError::RayCast)?;
+    let model = BeamFieldModel::new(BeamModel::new(start), caster);
+    let n = log
+        .beams()
+        .ok_or_else(|| FitError::Scans("log has no scans".into()))?;
+    if n > FIT_MAX_BEAMS {
+        return Err(FitError::Scans(format!(
+            "scans have {n} beams, more than {FIT_MAX_BEAMS}"
+        )));
+    }
+    let step = (std::f64::consts::PI / n as f64) as f32;
+    let layout = beamfield::BeamLayout::<FIT_MAX_BEAMS>::uniform(
+        -core::f32::consts::FRAC_PI_2,
+        step,
+        n,
+        max_range_m,
+        beamfield::SensorMount::CENTERED,
+    )
+    .map_err(|e| FitError::Scans(format!("layout: {e}")))?;
+    let (a, b) = args.scans.unwrap_or((0, log.scans.len()));
+    let chosen = log.scans.get(a..b.min(log.scans.len())).unwrap_or(&[]);
+    if chosen.is_empty() {
+        return Err(FitError::Scans(format!(
+            "no scans in {a}..{b} (the log has {})",
+            log.scans.len()
+        )));
+    }
+    let t0 = Instant::now();
+    let (mut z, mut z_star) = (Vec::new(), Vec::new());
+    let mut buf = vec![f32::NAN; n];
+    for (i, scan) in chosen.iter().enumerate() {
+        let pose = Pose {
+            x_m: scan.pose.x_m,
+            y_m: scan.pose.y_m,
+            theta_rad: scan.pose.theta_rad,
+        };
+        model.cast_layout(&layout, &pose, stride, &mut buf);
+        for (&r, &s) in scan.ranges_m.iter().zip(&buf).step_by(stride.get()) {
+            z.push(r);
+            z_star.push(s);
+        }
+        if i % 100 == 0 || i + 1 == chosen.len() {
+            progress(i + 1, chosen.len());
+        }
+    }
+    let cast_s = t0.elapsed().as_secs_f64();
+    let config = EmConfig {
+        max_iterations: args.iterations,
+        shape_update: match args.lambda {
+            LambdaUpdate::Textbook => ShapeUpdate::Textbook,
+            LambdaUpdate::Truncated => ShapeUpdate::Truncated,
+        },
+        ..EmConfig::default()
+    };
+    let mut trace = vec![0.0f64; args.iterations as usize + 1];
+    let t1 = Instant::now();
+    let fit = fit_slices(&config, start, &z, &z_star, &mut trace).map_err(FitError::Em)?;
+    let em_s = t1.elapsed().as_secs_f64();
+    trace.truncate(fit.trace_len);
+    Ok(FitReport {
+        fit,
+        trace,
+        scans: chosen.len(),
+        pairs: z.len(),
+        cast_s,
+        em_s,
+    })
+}
+
+fn stop_name(s: StopReason) -> String {
+    match s {
+        StopReason::Converged => "converged".into(),
+        StopReason::IterationLimit => "iteration limit".into(),
+        StopReason::NoData => "no usable data".into(),
+        StopReason::Degenerate(p) => format!("degenerate: {} ran to its bound", p.amcl_name()),
+        _ => format!("{s:?}"),
+    }
+}
+
+/// The fitted intrinsics under their AMCL names, `(name, value)`.
+pub fn amcl_pairs(i: &BeamIntrinsics) -> [(&'static str, f32); 7] {
+    [
+        (Param::ZHit.amcl_name(), i.z_hit()),
+        (Param::ZShort.amcl_name(), i.z_short()),
+        (Param::ZMax.amcl_name(), i.z_max()),
+        (Param::ZRand.amcl_name(), i.z_rand()),
+        (Param::SigmaHit.amcl_name(), i.sigma_hit_m()),
+        (Param::LambdaShort.amcl_name(), i.lambda_short_per_m()),
+        (Param::MaxRange.amcl_name(), i.max_range_m()),
+    ]
+}
+
+/// Runs `beamfield fit` and returns what to print on stdout.
+///
+/// # Errors
+/// [`FitError`].
+pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
+    let bytes = std::fs::read(&args.field).map_err(|e| FitError::Io(args.field.clone(), e))?;
+    let view = FieldView::parse(&bytes).map_err(|e| FitError::Blob(args.field.clone(), e))?;
+    let t_read = Instant::now();
+    let log = CarmenLog::read_path(
+        &args.log,
+        ReadOptions {
+            max_range_m: args.max_range,
+            skip_bad_lines: false,
+        },
+    )
+    .map_err(FitError::Log)?;
+    let read_s = t_read.elapsed().as_secs_f64();
+    let r = fit_log(view, &log, args, |done, total| {
+        eprint!("\rcasting z*: scan {done}/{total}");
+        if done == total {
+            eprintln!();
+        }
+    })?;
+    let intr = r.fit.intrinsics;
+    let decrease = r.largest_decrease();
+    if json {
+        let params: serde_json::Map<String, serde_json::Value> = amcl_pairs(&intr)
+            .iter()
+            .map(|(k, v)| ((*k).to_string(), serde_json::json!(v)))
+            .collect();
+        let v = serde_json::json!({
+            "intrinsics": params,
+            "stop": stop_name(r.fit.stop),
+            "iterations": r.fit.iterations,
+            "passes": r.fit.passes,
+            "trace_nats_per_beam": r.trace,
+            "trace_dropped": r.fit.trace_dropped,
+            "trace_largest_decrease": decrease,
+            "scans": r.scans,
+            "pairs": r.pairs,
+            "used": r.fit.counts.used,
+            "invalid": r.fit.counts.invalid,
+            "unexplained": r.fit.counts.unexplained,
+            "read_s": read_s,
+            "cast_s": r.cast_s,
+            "em_s": r.em_s,
+        });
+        return Ok(v.to_string());
+    }
+    let mut out = String::new();
+    out.push_str("fitted beam-model intrinsics (AMCL names):\n");
+    for (k, v) in amcl_pairs(&intr) {
+        out.push_str(&format!("  {k:<20} {v:.6}\n"));
+    }
+    out.push_str(&format!(
+        "stopped: {} after {} iterations ({} passes)\n",
+        stop_name(r.fit.stop),
+        r.fit.iterations,
+        r.fit.passes
+    ));
+    out.push_str(&format!(
+        "data: {} scans, {} pairs, {} used, {} invalid, {} unexplained\n",
+        r.scans, r.pairs, r.fit.counts.used, r.fit.counts.invalid, r.fit.counts.unexplained
+    ));
+    out.push_str("trace (mean log-likelihood per beam, nats):\n");
+    for (t, l) in r.trace.iter().enumerate() {
+        out.push_str(&format!("  {t:>4} {l:.9}\n"));
+    }
+    out.push_str(&format!(
+        "trace never decreases: {} (largest decrease {decrease:.3e})\n",
+        decrease <= 0.0
+    ));
+    out.push_str(&format!(
+        "time: read log {:.3} s, cast z* {:.3} s, EM {:.3} s",
+        read_s, r.cast_s, r.em_s
+    ));
+    Ok(out)
+}
