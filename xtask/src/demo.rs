@@ -85,7 +85,7 @@ pub fn demo(board: Board) -> Result {
         124 => Err(format!("the demo did not finish within {QEMU_TIMEOUT_S} s")),
         134 => Err(format!("QEMU stopped with a CPU lockup on `{machine}`")),
         c => Err(format!(
-            "the demo exited {c} under QEMU ({machine}): a best pose is off"
+            "the demo exited {c} under QEMU ({machine}): a scan could not be scored"
         )),
     }
 }
