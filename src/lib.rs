@@ -2,6 +2,7 @@
 #![cfg_attr(not(test), no_std)]
 
 pub mod beam;
+pub mod correlation;
 pub mod diagnostic;
 pub mod em;
 pub mod field;
@@ -16,6 +17,9 @@ pub mod sonar;
 pub mod tempered;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
+pub use correlation::{
+    Correlation, CorrelationError, MapCorrelation, CORRELATION_EPSILON, MAX_WINDOW_CELLS,
+};
 pub use diagnostic::Lag1;
 pub use field::{
     edt_scratch_len, emit_blob, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError,
