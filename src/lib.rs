@@ -3,6 +3,7 @@
 
 pub mod beam;
 pub mod beam_field;
+pub mod correlation;
 pub mod diagnostic;
 pub mod em;
 pub mod field;
@@ -19,6 +20,9 @@ pub mod tempered;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use beam_field::BeamFieldModel;
+pub use correlation::{
+    Correlation, CorrelationError, MapCorrelation, CORRELATION_EPSILON, MAX_WINDOW_CELLS,
+};
 pub use diagnostic::Lag1;
 pub use field::{
     edt_scratch_len, emit_blob, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError,

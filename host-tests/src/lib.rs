@@ -7,6 +7,7 @@
 pub mod field_reference;
 pub mod firmware_cases;
 pub mod firmware_models;
+pub mod issue9_cases;
 pub mod reference;
 pub mod sonar_sim;
 pub mod sonar_uci;
