@@ -5,6 +5,8 @@ pub mod beam;
 pub mod diagnostic;
 pub mod em;
 pub mod field;
+#[cfg(feature = "fixed")]
+pub mod fixed_point;
 pub mod gaussian;
 pub mod intrinsics;
 pub mod landmark;
