@@ -316,7 +316,7 @@ impl<'a> FixedField<'a> {
         }
         let max_range_m = field.params().max_range_m();
         let max_cells = max_range_m / cell;
-        if !(max_cells < MAX_RANGE_CELLS) {
+        if max_cells.is_nan() || max_cells >= MAX_RANGE_CELLS {
             return Err(FixedError::RangeTooLong);
         }
         let range_q4_per_m = 16.0 / cell;
@@ -463,8 +463,9 @@ impl<'a> FixedField<'a> {
         // Q12.4 · Q1.15 = Q.19 → Q.8.
         let gx = ax.wrapping_add(r.wrapping_mul(ux) >> 11);
         let gy = ay.wrapping_add(r.wrapping_mul(uy) >> 11);
-        let cx = gx.clamp(0, self.width_q8);
-        let cy = gy.clamp(0, self.height_q8);
+        // `max`/`min`, not `clamp`: clamp asserts its bounds (a panic path).
+        let cx = gx.max(0).min(self.width_q8);
+        let cy = gy.max(0).min(self.height_q8);
         let ix = (cx >> 8).min(self.last_ix) as usize;
         let iy = (cy >> 8).min(self.last_iy) as usize;
         let code = self
