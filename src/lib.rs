@@ -7,6 +7,8 @@ pub mod correlation;
 pub mod diagnostic;
 pub mod em;
 pub mod field;
+#[cfg(feature = "fixed")]
+pub mod fixed_point;
 pub mod gaussian;
 pub mod intrinsics;
 pub mod landmark;

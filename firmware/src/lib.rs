@@ -6,6 +6,7 @@
 //! with a debugger that serves semihosting.
 #![no_std]
 
+pub mod fixed_cases;
 pub mod reference_cases;
 
 use core::fmt;
