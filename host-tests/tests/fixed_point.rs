@@ -122,15 +122,13 @@ fn matches_f32_path_on_turtlebot3_and_same_best_pose() {
                             // (√2 · 6.375 code steps) plus one step of quantization each.
                             assert!(a.abs_diff(*b) <= 11, "codes {a} vs {b}");
                             // Off by one cell at most: codes of neighbours.
-                            bound += (f64::from(table[*a]) - f64::from(tbits[*b]) / 65_536.0)
-                                .abs()
+                            bound += (f64::from(table[*a]) - f64::from(tbits[*b]) / 65_536.0).abs()
                                 + 0.5 / 65_536.0;
                         }
                     }
                     bound += N as f64 * f64::from(f32::EPSILON) * abs_sum;
-                    let diff = (f64::from(sf.log_likelihood)
-                        - sx.log_likelihood.to_num::<f64>())
-                    .abs();
+                    let diff =
+                        (f64::from(sf.log_likelihood) - sx.log_likelihood.to_num::<f64>()).abs();
                     assert!(diff <= bound, "pose {p:?}: diff {diff} > bound {bound}");
                     worst_diff = worst_diff.max(diff);
                     if sf.log_likelihood > best_f.0 {
@@ -227,7 +225,13 @@ fn millimetre_ranges_match_metre_ranges() {
     let mm: Vec<u16> = scan
         .ranges_m()
         .iter()
-        .map(|r| if r.is_finite() { (r * 1000.0).round() as u16 } else { 3500 })
+        .map(|r| {
+            if r.is_finite() {
+                (r * 1000.0).round() as u16
+            } else {
+                3500
+            }
+        })
         .collect();
     let rounded: Vec<f32> = mm.iter().map(|&m| f32::from(m) / 1000.0).collect();
     let a = FixedScan::from_scan(&Scan::<N>::from_ranges(&rounded).unwrap(), &ff);

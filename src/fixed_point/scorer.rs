@@ -218,9 +218,7 @@ impl<const N: usize> FixedScan<N> {
             };
             out.max_range = out.max_range.saturating_add(u16::from(is_max));
             let dropped = out.ranges_q4.push(q).is_err();
-            out.invalid = out
-                .invalid
-                .saturating_add(u16::from(is_invalid || dropped));
+            out.invalid = out.invalid.saturating_add(u16::from(is_invalid || dropped));
         }
         out
     }
@@ -492,7 +490,7 @@ impl<'a> FixedField<'a> {
         let ey4 = (ey >> 4).clamp(-lim, lim);
         let d2 = (ex4 * ex4 + ey4 * ey4) as u32; // Q.8 cells²
         let d_q4 = isqrt(d2); // Q.4 cells, ≤ 23 171
-        // Q.4 · Q.8 = Q.12 codes; d_q4·spc_q8 < 2¹⁵·2¹⁶.
+                              // Q.4 · Q.8 = Q.12 codes; d_q4·spc_q8 < 2¹⁵·2¹⁶.
         (d_q4 * self.steps_per_cell_q8 + (1 << 11)) >> 12
     }
 }

@@ -57,7 +57,9 @@ fn main() -> ! {
     bench_mark_start();
     for ((p, _, _, _), out) in CASES.iter().zip(f32_ll.iter_mut()) {
         let pose = Pose::new(p.0, p.1, p.2);
-        *out = lf.score(black_box(&layout), black_box(&scan), &pose).log_likelihood;
+        *out = lf
+            .score(black_box(&layout), black_box(&scan), &pose)
+            .log_likelihood;
     }
     bench_mark_end();
 
