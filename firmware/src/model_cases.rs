@@ -164,3 +164,20 @@ pub const SONAR_RANGES_M: [f32; 24] = [1.2, 1.31, 5.0, 2.05, 0.4, 2.9, 3.1, f32:
 pub const SONAR_Z_STAR_M: [f32; 24] = [1.21, 1.3, 3.9, 2.0, 2.4, 2.95, 3.05, 4.5, 2.25, 1.95, 1.7, 1.6, 1.12, 1.18, 1.5, 0.82, 0.74, 0.73, 0.8, 0.88, 1.02, 1.28, 1.26, 1.2];
 /// Host: sonar scan log-likelihood.
 pub const SONAR: f32 = 6.1180453;
+/// The correlation case's 8 × 6 blob.
+pub static CORR_BLOB: [u8; 96] = [66, 70, 68, 70, 1, 0, 48, 0, 8, 0, 0, 0, 6, 0, 0, 0, 0, 0, 0, 63, 0, 0, 128, 191, 0, 0, 128, 191, 0, 0, 0, 64, 1, 0, 0, 0, 48, 0, 0, 0, 17, 211, 185, 91, 150, 144, 110, 75, 0, 0, 0, 0, 0, 0, 0, 0, 0, 40, 40, 40, 40, 40, 40, 0, 0, 40, 40, 0, 0, 40, 40, 0, 0, 40, 40, 40, 40, 40, 40, 0, 0, 40, 40, 40, 40, 40, 40, 0, 0, 0, 0, 0, 0, 0, 0, 0];
+/// Correlation window (cells), bearings (first, step rad, max range m), pose.
+pub const CORR_WINDOW: (u32, u32) = (7, 5);
+pub const CORR_BEARINGS: [f32; 3] = [-2.8, 0.8, 3.0];
+pub const CORR_POSE: [f32; 3] = [0.9, 0.6, 0.3];
+/// Correlation ranges, metres.
+pub const CORR_RANGES: [f32; 8] = [1.3, 1.6, 0.9, 2.0, 1.1, 3.5, f32::NAN, 1.45];
+/// Host: ρ.
+pub const CORR_RHO: f32 = -0.17722717;
+/// Sampler: feature, landmark, noise, words.
+pub const SAMPLER_FEATURE: [f32; 3] = [4.0, 0.5, 2.0];
+pub const SAMPLER_LANDMARK: [f32; 3] = [1.5, -2.0, 2.0];
+pub const SAMPLER_NOISE: [f32; 3] = [0.2, 0.1, 1.0];
+pub const SAMPLER_WORDS: [u32; 9] = [305419896, 2596069104, 253635900, 1264216440, 3735928559, 2147483392, 1010580540, 2779096485, 256];
+/// Host: the sampler's first three poses.
+pub const SAMPLED: [[f32; 3]; 3] = [[4.93866, -0.35247076, 3.1247807], [0.37072146, 1.9472587, -1.7921478], [1.8518548, 1.797117, -2.163196]];

@@ -9,6 +9,8 @@
 //! (`cargo xtask modelcases` rewrites it).
 
 use crate::field_reference::{self, Grid};
+use crate::issue9_cases::{correlation_case, SAMPLER_INPUT, SAMPLER_WORDS};
+use beamfield::landmark::sample_pose;
 use beamfield::landmark::{log_likelihood, Feature, FeatureNoise, Landmark};
 use beamfield::sonar::{CrosstalkModel, Ring, Schedule, SonarModel};
 use beamfield::{
@@ -16,6 +18,7 @@ use beamfield::{
     BeamIntrinsics, BeamLayout, EdtScratch, FieldHeader, FieldView, Lag1, LikelihoodField,
     LikelihoodParams, Pose, Scan, SensorModel, SensorMount, Tempered, EDT_INFINITY,
 };
+use beamfield::{emit_blob, MapCorrelation};
 use std::fmt::Write as _;
 
 /// Path of the generated file, relative to the repository root.
@@ -238,6 +241,77 @@ pub fn sonar_score() -> f32 {
         .log_likelihood
 }
 
+/// The correlation case of `issue9_cases` as a blob: `#` cells are occupied (code 0), others
+/// code 40.
+pub fn correlation_blob() -> Vec<u8> {
+    let c = correlation_case();
+    let codes: Vec<u8> = c
+        .map
+        .iter()
+        .flat_map(|row| row.bytes().map(|b| if b == b'#' { 0 } else { 40 }))
+        .collect();
+    let h = FieldHeader::new(8, 6, c.cell_m, c.origin_m.0, c.origin_m.1);
+    let mut blob = vec![0u8; h.required_len().expect("correlation header")];
+    emit_blob(&h, &codes, &mut blob).expect("correlation blob");
+    blob
+}
+
+/// Replays a fixed list of words as a `rand_core` generator (the sampler case).
+pub struct Replay<'a>(pub &'a [u32]);
+
+impl rand_core::TryRng for Replay<'_> {
+    type Error = core::convert::Infallible;
+    fn try_next_u32(&mut self) -> Result<u32, core::convert::Infallible> {
+        let (first, rest) = self.0.split_first().unwrap_or((&0, &[]));
+        self.0 = rest;
+        Ok(*first)
+    }
+    fn try_next_u64(&mut self) -> Result<u64, core::convert::Infallible> {
+        let lo = u64::from(self.try_next_u32()?);
+        Ok(lo | (u64::from(self.try_next_u32()?) << 32))
+    }
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), core::convert::Infallible> {
+        for b in dst {
+            *b = self.try_next_u32()? as u8;
+        }
+        Ok(())
+    }
+}
+
+fn correlation_rho() -> f32 {
+    let c = correlation_case();
+    let blob = correlation_blob();
+    let view = FieldView::parse(&blob).expect("correlation blob parses");
+    let mut buf = vec![0u8; (c.window.0 * c.window.1) as usize];
+    let model = MapCorrelation::new(view, c.window.0, c.window.1, &mut buf).expect("window");
+    let layout = BeamLayout::<8>::uniform(
+        c.bearings.0,
+        c.bearings.1,
+        8,
+        c.bearings.2,
+        SensorMount::CENTERED,
+    )
+    .expect("layout");
+    let scan = Scan::<8>::from_ranges(&c.ranges_m).expect("scan");
+    model
+        .correlate(&layout, &scan, &Pose::new(c.pose[0], c.pose[1], c.pose[2]))
+        .rho
+}
+
+fn sampled_poses() -> Vec<[f32; 3]> {
+    let (fi, li, _, ni) = SAMPLER_INPUT;
+    let f = Feature::new(fi[0], fi[1], fi[2]).expect("feature");
+    let l = Landmark::new(li[0], li[1], li[2]).expect("landmark");
+    let n = FeatureNoise::new(ni[0], ni[1], ni[2]).expect("noise");
+    let mut rng = Replay(&SAMPLER_WORDS);
+    (0..3)
+        .map(|_| {
+            let p = sample_pose(&f, &l, &n, &mut rng);
+            [p.x_m, p.y_m, p.theta_rad]
+        })
+        .collect()
+}
+
 /// The host's results for every case.
 #[derive(Clone, Debug)]
 pub struct Expected {
@@ -257,6 +331,10 @@ pub struct Expected {
     pub landmark: Vec<f32>,
     /// Sonar scan log-likelihood.
     pub sonar: f32,
+    /// ρ of the correlation case.
+    pub rho: f32,
+    /// The sampler's first three poses from the fixed words.
+    pub sampled: Vec<[f32; 3]>,
 }
 
 /// Evaluates every case with the crate on the host.
@@ -301,6 +379,8 @@ pub fn expected() -> Expected {
         lag1: lag.correlation().unwrap_or(f32::NAN),
         landmark,
         sonar: sonar_score(),
+        rho: correlation_rho(),
+        sampled: sampled_poses(),
     }
 }
 
@@ -396,6 +476,31 @@ pub fn render() -> String {
         s,
         "/// Host: sonar scan log-likelihood.\npub const SONAR: f32 = {:?};",
         e.sonar
+    );
+    let c = correlation_case();
+    let cb = correlation_blob();
+    let _ = writeln!(
+        s,
+        "/// The correlation case's 8 × 6 blob.\npub static CORR_BLOB: [u8; {}] = {:?};",
+        cb.len(),
+        cb
+    );
+    let _ = writeln!(s, "/// Correlation window (cells), bearings (first, step rad, max range m), pose.\npub const CORR_WINDOW: (u32, u32) = {:?};\npub const CORR_BEARINGS: [f32; 3] = [{}];\npub const CORR_POSE: [f32; 3] = [{}];", c.window, list(&[c.bearings.0, c.bearings.1, c.bearings.2]), list(&c.pose));
+    let _ = writeln!(
+        s,
+        "/// Correlation ranges, metres.\npub const CORR_RANGES: [f32; 8] = [{}];",
+        list(&c.ranges_m)
+            .replace("NaN", "f32::NAN")
+            .replace("inf", "f32::INFINITY")
+    );
+    let _ = writeln!(s, "/// Host: ρ.\npub const CORR_RHO: f32 = {:?};", e.rho);
+    let (fi, li, _, ni) = SAMPLER_INPUT;
+    let _ = writeln!(s, "/// Sampler: feature, landmark, noise, words.\npub const SAMPLER_FEATURE: [f32; 3] = [{}];\npub const SAMPLER_LANDMARK: [f32; 3] = [{}];\npub const SAMPLER_NOISE: [f32; 3] = [{}];\npub const SAMPLER_WORDS: [u32; {}] = {:?};", list(&fi), list(&li), list(&ni), SAMPLER_WORDS.len(), SAMPLER_WORDS);
+    let poses: Vec<String> = e.sampled.iter().map(|p| format!("[{}]", list(p))).collect();
+    let _ = writeln!(
+        s,
+        "/// Host: the sampler's first three poses.\npub const SAMPLED: [[f32; 3]; 3] = [{}];",
+        poses.join(", ")
     );
     s
 }

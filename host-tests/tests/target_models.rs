@@ -115,3 +115,21 @@ fn landmark_cases_match_the_f64_formula() {
         );
     }
 }
+
+/// The correlation and sampler cases against issue 9's f64 values.
+#[test]
+fn correlation_and_sampler_match_the_f64_values() {
+    use host_tests::issue9_cases::{correlation_case, sampler_poses, POSE_TOL, RHO_TOL};
+    let e = expected();
+    let want = correlation_case().expected_rho;
+    assert!(
+        (f64::from(e.rho) - want).abs() <= RHO_TOL,
+        "{} vs {want}",
+        e.rho
+    );
+    for (got, want) in e.sampled.iter().zip(sampler_poses()) {
+        for (g, w) in got.iter().zip(want) {
+            assert!((f64::from(*g) - w).abs() <= POSE_TOL, "{got:?} vs {want:?}");
+        }
+    }
+}
