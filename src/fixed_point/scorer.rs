@@ -72,7 +72,6 @@ impl core::error::Error for FixedError {}
 
 /// A robot pose in fixed point: position `I16F16` metres, heading as Q2.30 cos/sin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FixedPose {
     x_m: I16F16,
     y_m: I16F16,
@@ -239,7 +238,6 @@ impl<const N: usize> FixedScan<N> {
 
 /// A fixed-point scan score (the counterpart of [`crate::ScanScore`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FixedScore {
     /// Sum of the scored beams' terms, nats.
     pub log_likelihood: I48F16,
@@ -517,6 +515,36 @@ fn isqrt(v: u32) -> u32 {
         bit >>= 2;
     }
     root
+}
+
+// The `fixed` crate has no defmt support: these print the raw bits with their scale.
+#[cfg(feature = "defmt")]
+impl defmt::Format for FixedPose {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "FixedPose {{ x: {=i32}/65536 m, y: {=i32}/65536 m, cos: {=i32}/2^30, sin: {=i32}/2^30 }}",
+            self.x_m.to_bits(),
+            self.y_m.to_bits(),
+            self.cos_q30,
+            self.sin_q30
+        );
+    }
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for FixedScore {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "FixedScore {{ log_likelihood: {=i64}/65536 nats, scored: {=u16}, max_range: {=u16}, invalid: {=u16}, unpaired: {=u16} }}",
+            self.log_likelihood.to_bits(),
+            self.scored,
+            self.max_range,
+            self.invalid,
+            self.unpaired
+        );
+    }
 }
 
 #[cfg(test)]
