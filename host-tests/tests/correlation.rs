@@ -380,25 +380,9 @@ fn intel_peak_at_truth_and_with_a_wall_removed() {
 // ---------------------------------------------------------------------------------------------
 // The on-target reference cases (host_tests::issue9_cases), checked on the host.
 
-struct Replay<'a>(&'a [u32]);
-impl rand_core::TryRng for Replay<'_> {
-    type Error = std::convert::Infallible;
-    fn try_next_u32(&mut self) -> Result<u32, std::convert::Infallible> {
-        let (first, rest) = self.0.split_first().expect("word stream exhausted");
-        self.0 = rest;
-        Ok(*first)
-    }
-    fn try_next_u64(&mut self) -> Result<u64, std::convert::Infallible> {
-        let lo = u64::from(self.try_next_u32()?);
-        Ok(lo | (u64::from(self.try_next_u32()?) << 32))
-    }
-    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), std::convert::Infallible> {
-        for b in dst {
-            *b = self.try_next_u32()? as u8;
-        }
-        Ok(())
-    }
-}
+// The word-replaying generator shared with the on-target cases (an exhausted stream reads 0;
+// the test checks below that every word was used and no more).
+use host_tests::firmware_models::Replay;
 
 #[test]
 fn issue9_reference_cases_hold_on_host() {

@@ -484,27 +484,26 @@ fn cross() -> Result {
 }
 
 fn refcases(check: bool) -> Result {
-    let path = repo_root().join(host_tests::firmware_cases::GENERATED_PATH);
-    let want = host_tests::firmware_cases::render();
-    let have = fs::read_to_string(&path).unwrap_or_default();
-    if have == want {
-        eprintln!("xtask: {} is up to date", path.display());
-        return Ok(());
-    }
-    if check {
-        return Err(format!(
-            "{} is stale: run `cargo xtask refcases` and commit it",
-            path.display()
-        ));
-    }
-    fs::write(&path, want).map_err(|e| format!("{}: {e}", path.display()))?;
-    eprintln!("xtask: wrote {}", path.display());
-    Ok(())
+    generated_file(
+        host_tests::firmware_cases::GENERATED_PATH,
+        &host_tests::firmware_cases::render(),
+        check,
+        "refcases",
+    )
 }
 
 fn modelcases(check: bool) -> Result {
-    let path = repo_root().join(host_tests::firmware_models::GENERATED_PATH);
-    let want = host_tests::firmware_models::render();
+    generated_file(
+        host_tests::firmware_models::GENERATED_PATH,
+        &host_tests::firmware_models::render(),
+        check,
+        "modelcases",
+    )
+}
+
+/// Writes (or with `check`, only compares) a file the host generates for the firmware.
+fn generated_file(relative: &str, want: &str, check: bool, task: &str) -> Result {
+    let path = repo_root().join(relative);
     let have = fs::read_to_string(&path).unwrap_or_default();
     if have == want {
         eprintln!("xtask: {} is up to date", path.display());
@@ -512,7 +511,7 @@ fn modelcases(check: bool) -> Result {
     }
     if check {
         return Err(format!(
-            "{} is stale: run `cargo xtask modelcases` and commit it",
+            "{} is stale: run `cargo xtask {task}` and commit it",
             path.display()
         ));
     }
