@@ -8,6 +8,7 @@
 
 // Generated data: its tuple table is the generator's format, not a design choice.
 #[allow(clippy::type_complexity)]
+#[rustfmt::skip]
 pub mod fixed_cases;
 pub mod reference_cases;
 
