@@ -200,13 +200,16 @@ fn main() -> ! {
             all_ok = false;
             continue;
         };
-        let t0 = cortex_m::peripheral::SYST::get_current();
+        // Timed pose by pose: a whole scan's scoring (~10^8 instructions) would wrap the
+        // 24-bit SysTick counter on a 168 MHz board; one pose never does.
+        let mut ticks = 0u64;
         for (i, w) in weights.iter_mut().enumerate() {
             let pose = hypothesis(&logged, i);
+            let t0 = cortex_m::peripheral::SYST::get_current();
             *w = tempered.score(&layout, &scan, &pose).log_likelihood;
+            let t1 = cortex_m::peripheral::SYST::get_current();
+            ticks += u64::from(ticks_between(t0, t1));
         }
-        let t1 = cortex_m::peripheral::SYST::get_current();
-        let ticks = u64::from(ticks_between(t0, t1));
         total_ticks += ticks;
         let norm = match normalize_log_weights(&mut weights) {
             Ok(n) => n,
