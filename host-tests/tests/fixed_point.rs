@@ -51,7 +51,7 @@ fn scan_at(grid: &Grid, layout: &BeamLayout<N>, p: (f32, f32, f32), z_max: f32) 
 
 /// Per pose and scan: beams whose table index agrees contribute at most the table rounding
 /// (2⁻¹⁷ nats) each; beams whose endpoint falls in another cell (the endpoint differs by at
-/// most ~1/16 cell of range rounding plus 2⁻¹⁵·r of direction) contribute their exact term
+/// most ~1/256 cell of range rounding plus ~1.5·2⁻¹⁵·r of direction) contribute their exact term
 /// difference. The f32 sum itself rounds by at most n·ε·Σ|term|. The test checks
 /// |LL_fixed − LL_f32| against that bound, and that index flips are rare.
 #[test]
@@ -239,8 +239,8 @@ fn millimetre_ranges_match_metre_ranges() {
     let p = FixedPose::from_pose(&Pose::new(0.55, 0.6, -2.0)).unwrap();
     let (sa, sb) = (ff.score(&fl, &a, &p), ff.score(&fl, &b, &p));
     assert_eq!((sa.scored, sa.max_range), (sb.scored, sb.max_range));
-    // Same Q12.4 ranges up to one rounding step.
-    for (x, y) in a.ranges_q4().iter().zip(b.ranges_q4()) {
+    // Same Q11.8 ranges up to one rounding step.
+    for (x, y) in a.ranges_q8().iter().zip(b.ranges_q8()) {
         assert!((x - y).abs() <= 1, "{x} vs {y}");
     }
     let finite = scan.ranges_m().iter().filter(|r| r.is_finite()).count();

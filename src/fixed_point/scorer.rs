@@ -20,9 +20,9 @@ pub const MAX_FIXED_BEAMS: usize = u16::MAX as usize;
 
 const _: () = assert!((MAX_FIXED_BEAMS as i128) * (1i128 << 31) * (1i128 << 16) < (1i128 << 63));
 
-/// The longest range the scorer represents, cells: ranges are Q12.4 cells below `2¹⁵`, so
-/// that `range × unit vector` (Q1.15) fits an `i32`. The parameter set's `max_range_m` must
-/// be below this many cells.
+/// The longest range the scorer represents, cells: ranges are Q11.8 cells below `2¹⁹`, whose
+/// integer part (below `2¹¹`) and fraction (below `2⁸`) are each multiplied by a Q1.15 unit
+/// vector within an `i32`. The parameter set's `max_range_m` must be below this many cells.
 pub const MAX_RANGE_CELLS: f32 = 2047.0;
 
 /// Off-map excursions are clamped at this many cells per axis (Q.4 squares stay < 2³⁰); the
@@ -165,11 +165,11 @@ fn libm_round(v: f32) -> i32 {
     crate::math::floor(v + 0.5) as i32
 }
 
-/// A scan converted once for a [`FixedField`]: ranges in Q12.4 cells, skipped readings
+/// A scan converted once for a [`FixedField`]: ranges in Q11.8 cells, skipped readings
 /// marked `−1`, counts kept.
 #[derive(Clone, Debug)]
 pub struct FixedScan<const N: usize> {
-    ranges_q4: heapless::Vec<i32, N>,
+    ranges_q8: heapless::Vec<i32, N>,
     max_range: u16,
     invalid: u16,
 }
@@ -182,20 +182,20 @@ impl<const N: usize> FixedScan<N> {
     pub fn from_scan(scan: &Scan<N>, field: &FixedField<'_>) -> Self {
         let mut out = Self::empty();
         let max_r = field.max_range_m;
-        let per_m = field.range_q4_per_m;
+        let per_m = field.range_q8_per_m;
         for &r in scan.ranges_m() {
             let is_invalid = r.is_nan() || r < 0.0;
             let is_max = r >= max_r;
             let q = if is_invalid || is_max {
                 -1
             } else {
-                // r < max_range < 2047 cells: q < 2¹⁵.
+                // r < max_range < 2047 cells: q < 2¹⁹.
                 libm_round(r * per_m)
             };
             out.max_range = out.max_range.saturating_add(u16::from(is_max));
             out.invalid = out.invalid.saturating_add(u16::from(is_invalid));
             // Capacity equals the scan's: never fails.
-            let _ = out.ranges_q4.push(q);
+            let _ = out.ranges_q8.push(q);
         }
         out
     }
@@ -212,11 +212,12 @@ impl<const N: usize> FixedScan<N> {
             let q = if is_invalid || is_max {
                 -1
             } else {
-                // mm < max_range_mm; q4_per_mm_q16 < 2¹⁶·2¹⁵/max_range_mm: the product < 2³¹.
-                ((u32::from(mm) * field.range_q4_per_mm_q16 + (1 << 15)) >> 16) as i32
+                // mm < max_range_mm < 2047 cells, so the result is below 2¹⁹; the product is
+                // formed in u64 (once per reading, not per pose).
+                ((u64::from(mm) * u64::from(field.range_q8_per_mm_q16) + (1 << 15)) >> 16) as i32
             };
             out.max_range = out.max_range.saturating_add(u16::from(is_max));
-            let dropped = out.ranges_q4.push(q).is_err();
+            let dropped = out.ranges_q8.push(q).is_err();
             out.invalid = out.invalid.saturating_add(u16::from(is_invalid || dropped));
         }
         out
@@ -224,15 +225,15 @@ impl<const N: usize> FixedScan<N> {
 
     fn empty() -> Self {
         Self {
-            ranges_q4: heapless::Vec::new(),
+            ranges_q8: heapless::Vec::new(),
             max_range: 0,
             invalid: 0,
         }
     }
 
-    /// The converted ranges, Q12.4 cells; `−1` marks a skipped reading.
-    pub fn ranges_q4(&self) -> &[i32] {
-        &self.ranges_q4
+    /// The converted ranges, Q11.8 cells; `−1` marks a skipped reading.
+    pub fn ranges_q8(&self) -> &[i32] {
+        &self.ranges_q8
     }
 }
 
@@ -280,8 +281,9 @@ pub struct FixedField<'a> {
     steps_per_cell_q8: u32,
     max_range_m: f32,
     max_range_mm: u32,
-    range_q4_per_m: f32,
-    range_q4_per_mm_q16: u32,
+    range_q8_per_m: f32,
+    /// Q11.8 cells per millimetre, Q.16 (below 2³² for any cell above 0.26 mm).
+    range_q8_per_mm_q16: u32,
 }
 
 impl<'a> FixedField<'a> {
@@ -315,7 +317,7 @@ impl<'a> FixedField<'a> {
         if max_cells.is_nan() || max_cells >= MAX_RANGE_CELLS {
             return Err(FixedError::RangeTooLong);
         }
-        let range_q4_per_m = 16.0 / cell;
+        let range_q8_per_m = 256.0 / cell;
         let max_range_mm = -crate::math::floor(-max_range_m * 1000.0).min(65_536.0) as u32;
         Ok(Self {
             view,
@@ -331,8 +333,8 @@ impl<'a> FixedField<'a> {
             steps_per_cell_q8: libm_round_u(spc * 256.0),
             max_range_m,
             max_range_mm,
-            range_q4_per_m,
-            range_q4_per_mm_q16: libm_round_u(range_q4_per_m * 65.536),
+            range_q8_per_m,
+            range_q8_per_mm_q16: libm_round_u(range_q8_per_m * 65.536),
         })
     }
 
@@ -367,7 +369,7 @@ impl<'a> FixedField<'a> {
         let (ax, ay, c15, s15) = self.sensor_in_grid(layout, pose);
         let mut sum: i64 = 0;
         let mut scored: u32 = 0;
-        for (k, (&(bx, by), &r)) in layout.beams.iter().zip(scan.ranges_q4.iter()).enumerate() {
+        for (k, (&(bx, by), &r)) in layout.beams.iter().zip(scan.ranges_q8.iter()).enumerate() {
             let idx = self.beam_index(ax, ay, c15, s15, bx, by, r);
             let term = self.table.get(idx).copied().unwrap_or(0);
             let valid = r >= 0;
@@ -382,7 +384,7 @@ impl<'a> FixedField<'a> {
             scored: u16::try_from(scored).unwrap_or(u16::MAX),
             max_range: scan.max_range,
             invalid: scan.invalid,
-            unpaired: u16::try_from(scan.ranges_q4.len().saturating_sub(layout.beams.len()))
+            unpaired: u16::try_from(scan.ranges_q8.len().saturating_sub(layout.beams.len()))
                 .unwrap_or(u16::MAX),
         }
     }
@@ -390,10 +392,10 @@ impl<'a> FixedField<'a> {
     /// The per-beam loop alone, kept out of line with an unmangled name so that the
     /// disassembly check (`cargo xtask nofloat`) can find it. Returns the raw `I48F16` sum.
     #[inline(never)]
-    pub fn sum_beams(&self, beams: &[(i32, i32)], ranges_q4: &[i32], sensor: [i32; 4]) -> i64 {
+    pub fn sum_beams(&self, beams: &[(i32, i32)], ranges_q8: &[i32], sensor: [i32; 4]) -> i64 {
         let [ax, ay, c15, s15] = sensor;
         let mut sum: i64 = 0;
-        for (&(bx, by), &r) in beams.iter().zip(ranges_q4) {
+        for (&(bx, by), &r) in beams.iter().zip(ranges_q8) {
             let idx = self.beam_index(ax, ay, c15, s15, bx, by, r);
             let term = self.table.get(idx).copied().unwrap_or(0);
             sum += i64::from(if r >= 0 { term } else { 0 });
@@ -410,7 +412,7 @@ impl<'a> FixedField<'a> {
         pose: &FixedPose,
     ) -> I48F16 {
         let (ax, ay, c, s) = self.sensor_in_grid(layout, pose);
-        I48F16::from_bits(self.sum_beams(&layout.beams, &scan.ranges_q4, [ax, ay, c, s]))
+        I48F16::from_bits(self.sum_beams(&layout.beams, &scan.ranges_q8, [ax, ay, c, s]))
     }
 
     /// Per pose: the sensor's position in Q.8 grid cells and its heading's cos/sin in Q1.15.
@@ -447,18 +449,39 @@ impl<'a> FixedField<'a> {
     }
 
     /// One beam's table index (0..=255). Bounds: |c15|, |s15|, |bx|, |by| ≤ 2¹⁵ and
-    /// `c² + s² ≤ 1 + 2⁻¹⁴`, so `c·bx − s·by` < 2³¹; `0 ≤ r < 2¹⁵` and |u| ≤ 2¹⁵ so `r·u ≤ 2³⁰`;
-    /// `|ax| ≤ 2²⁹` so the endpoint < 2³⁰. Wrapping operations keep the path panic-free in
-    /// every profile; the bounds make wrapping unreachable.
+    /// `c² + s² ≤ 1 + 2⁻¹⁴`, so `|c·bx − s·by| ≤ 2³⁰(1 + 2⁻¹⁴)` and the rounded `u` has
+    /// `|u| ≤ 2¹⁵ + 2`; `0 ≤ r < 2¹⁹` splits into whole cells `rh < 2¹¹` and a Q.8 fraction
+    /// `rl < 2⁸`, so `rh·u < 2²⁷` and `rl·u < 2²⁴`; `|ax| ≤ 2²⁹` so the endpoint < 2³⁰.
+    /// Wrapping operations keep the path panic-free in every profile; the bounds make wrapping
+    /// unreachable.
+    ///
+    /// Rounding: `u` to nearest (≤ 2⁻¹⁶ per component, plus the Q1.15 rounding of the beam and
+    /// heading vectors), `r·u` rounded twice (≤ 1/256 cell), `r` itself to 1/512 cell.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
     fn beam_index(&self, ax: i32, ay: i32, c: i32, s: i32, bx: i32, by: i32, r: i32) -> usize {
-        let ux = c.wrapping_mul(bx).wrapping_sub(s.wrapping_mul(by)) >> 15;
-        let uy = s.wrapping_mul(bx).wrapping_add(c.wrapping_mul(by)) >> 15;
+        const HALF: i32 = 1 << 14;
+        let ux = c
+            .wrapping_mul(bx)
+            .wrapping_sub(s.wrapping_mul(by))
+            .wrapping_add(HALF)
+            >> 15;
+        let uy = s
+            .wrapping_mul(bx)
+            .wrapping_add(c.wrapping_mul(by))
+            .wrapping_add(HALF)
+            >> 15;
         let r = r.max(0);
-        // Q12.4 · Q1.15 = Q.19 → Q.8.
-        let gx = ax.wrapping_add(r.wrapping_mul(ux) >> 11);
-        let gy = ay.wrapping_add(r.wrapping_mul(uy) >> 11);
+        let (rh, rl) = (r >> 8, r & 0xFF);
+        // Whole cells · Q1.15 = Q.15 → Q.8 (>> 7); Q.8 fraction · Q1.15 = Q.23 → Q.8 (>> 15);
+        // each rounded to nearest.
+        let part = |h: i32, l: i32, u: i32| {
+            (h.wrapping_mul(u).wrapping_add(1 << 6) >> 7)
+                .wrapping_add(l.wrapping_mul(u).wrapping_add(HALF) >> 15)
+        };
+        let (dx, dy) = (part(rh, rl, ux), part(rh, rl, uy));
+        let gx = ax.wrapping_add(dx);
+        let gy = ay.wrapping_add(dy);
         // `max`/`min`, not `clamp`: clamp asserts its bounds (a panic path).
         let cx = gx.max(0).min(self.width_q8);
         let cy = gy.max(0).min(self.height_q8);
