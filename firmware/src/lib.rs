@@ -144,11 +144,8 @@ pub fn defmt_line(args: fmt::Arguments<'_>) {
         .get(..line.len)
         .and_then(|b| core::str::from_utf8(b).ok())
         .unwrap_or("");
-    if line.cut {
-        defmt::println!("{=str} [cut]", text);
-    } else {
-        defmt::println!("{=str}", text);
-    }
+    let mark = if line.cut { " [cut]" } else { "" };
+    defmt::println!("{=str}{=str}", text, mark);
 }
 
 /// Ends the program: semihosting exit status 0 when `ok`, 1 otherwise.

@@ -248,12 +248,49 @@ fn gsec(m: &BTreeMap<String, u64>, names: &[&str]) -> u64 {
     names.iter().filter_map(|n| m.get(*n)).sum()
 }
 
-pub fn budgets(machine: &str) -> Result {
+/// Code and data symbols of an ELF (`llvm-nm -S -C`), name (without the hash) → bytes.
+fn symbols(nm: &Path, elf: &Path) -> Result<BTreeMap<String, u64>> {
+    let out = capture(Command::new(nm).args(["-S", "-C", "--size-sort"]).arg(elf))?;
+    let mut map = BTreeMap::new();
+    for line in out.lines() {
+        let mut f = line.splitn(4, ' ');
+        let (Some(_), Some(size), Some(kind), Some(name)) =
+            (f.next(), f.next(), f.next(), f.next())
+        else {
+            continue;
+        };
+        // t/T: code, r/R: constants, d/D/b/B: static RAM.
+        if !matches!(kind, "t" | "T" | "r" | "R" | "d" | "D" | "b" | "B") {
+            continue;
+        }
+        let Ok(bytes) = u64::from_str_radix(size, 16) else {
+            continue;
+        };
+        let name = match name.rsplit_once("::h") {
+            Some((base, hash)) if hash.len() == 16 => base,
+            _ => name,
+        };
+        // The two programs' own items differ only by their crate name; legacy-mangled trait
+        // impls keep `$LT$`-style escapes after demangling.
+        let name = name
+            .replace("size_core::", "<program>::")
+            .replace("size_skeleton::", "<program>::")
+            .replace("$LT$", "<")
+            .replace("$GT$", ">")
+            .replace("$u20$", " ")
+            .replace("..", "::");
+        let name = name.trim_start_matches('_');
+        *map.entry(name.to_string()).or_insert(0) += bytes;
+    }
+    Ok(map)
+}
+
+pub fn budgets(machine: &str, features: Option<&str>) -> Result {
     ensure_qemu()?;
     ensure_llvm_nm()?;
     let size = llvm_tool("llvm-size")?;
     let nm = llvm_tool("llvm-nm")?;
-    let elves = build_firmware(true, None)?;
+    let elves = build_firmware(true, features)?;
     let elf = |n: &str| {
         elves
             .get(n)
@@ -433,9 +470,25 @@ pub fn budgets(machine: &str) -> Result {
         ));
     }
 
+    // The largest symbols the core adds (present in size_core, absent from the skeleton).
+    let skel_syms = symbols(&nm, skel_elf)?;
+    let mut added: Vec<(u64, String)> = symbols(&nm, core_elf)?
+        .into_iter()
+        .filter(|(name, _)| !skel_syms.contains_key(name))
+        .map(|(name, bytes)| (bytes, name))
+        .collect();
+    added.sort_by(|a, b| b.cmp(a));
     println!(
-        "\nbudgets: scoring core on {FIRMWARE_TARGET} (release: LTO, 1 codegen unit, opt-level 3), \
-         instructions on QEMU {machine}"
+        "\nbudgets: largest symbols of the scoring core (in size_core, not in size_skeleton):"
+    );
+    for (bytes, name) in added.iter().take(12) {
+        println!("budgets:   {bytes:>6} B  {name}");
+    }
+
+    println!(
+        "\nbudgets: scoring core on {FIRMWARE_TARGET} (release: LTO, 1 codegen unit, opt-level 3; \
+         firmware features: {}), instructions on QEMU {machine}",
+        features.unwrap_or("none")
     );
     let w = rows.iter().map(|r| r.what.len()).max().unwrap_or(0);
     let wv = rows.iter().map(|r| r.value.len()).max().unwrap_or(0);

@@ -97,6 +97,9 @@ enum Task {
         /// QEMU machine for the instruction counts and the stack.
         #[arg(long, default_value = "mps2-an386")]
         machine: String,
+        /// Firmware features to build with (e.g. `micromath`: micromath's sin/cos).
+        #[arg(long)]
+        features: Option<String>,
     },
     /// Link-time proof that the scoring core cannot panic: builds size_core (release, LTO)
     /// with a panic handler that calls an undefined function; it must link.
@@ -136,7 +139,7 @@ fn main() -> ExitCode {
         Task::Insns { machine } => insns(&machine),
         Task::Cross => cross(),
         Task::Demo { board } => demo::demo(board),
-        Task::Budgets { machine } => budgets::budgets(&machine),
+        Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
         Task::DemoAssets => demo::demo_assets(),
         Task::Refcases { check } => refcases(check),
@@ -147,7 +150,7 @@ fn main() -> ExitCode {
             .and_then(|()| qemu("check", "mps2-an386", true))
             .and_then(|()| qemu("models", "mps2-an386", true))
             .and_then(|()| insns("mps2-an386"))
-            .and_then(|()| budgets::budgets("mps2-an386"))
+            .and_then(|()| budgets::budgets("mps2-an386", None))
             .and_then(|()| budgets::nopanic(false))
             .and_then(|()| budgets::nopanic(true)),
     };

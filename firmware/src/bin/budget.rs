@@ -77,6 +77,9 @@ struct Ctx<'a> {
     weights: [f32; POSES],
 }
 
+/// A measured scoring call.
+type Call = fn(&mut Ctx<'_>) -> f32;
+
 /// The deepest stack use below the caller's frame of `f(ctx)`, bytes, and its result.
 ///
 /// Paints `[sp − PAINT_BYTES, sp − GUARD_BYTES)` with `PAINT`, calls `f` through an opaque
@@ -84,7 +87,7 @@ struct Ctx<'a> {
 /// no longer `PAINT`. A result of `GUARD_BYTES` or less means "at most that". `None` if the
 /// painted region would reach `.bss`.
 #[inline(never)]
-fn stack_use(f: fn(&mut Ctx<'_>) -> f32, ctx: &mut Ctx<'_>) -> Option<(usize, f32)> {
+fn stack_use(f: Call, ctx: &mut Ctx<'_>) -> Option<(usize, f32)> {
     let sp = cortex_m::register::msp::read() as usize;
     let heap_start = core::ptr::addr_of!(__sheap) as usize;
     let bottom = sp.checked_sub(PAINT_BYTES)?;
@@ -259,7 +262,7 @@ fn main() -> ! {
         && norm.is_ok();
 
     ctx.weights = weights;
-    let calls: [(&str, fn(&mut Ctx<'_>) -> f32); 4] = [
+    let calls: [(&str, Call); 4] = [
         ("lf", call_lf),
         ("tempered", call_tempered),
         ("normalize", call_normalize),
