@@ -115,6 +115,8 @@ struct Region {
 
 /// What one run of `budget.rs` under the counting plugin reported.
 struct Run {
+    /// The program's description of its scan.
+    scan: String,
     regions: Vec<Region>,
     stack: BTreeMap<String, u64>,
     state: BTreeMap<String, u64>,
@@ -136,6 +138,7 @@ fn parse_run(out: &str, err: &str) -> Result<Run> {
         counts.insert(i, n);
     }
     let mut regions = Vec::new();
+    let mut scan = String::new();
     let (mut stack, mut state) = (BTreeMap::new(), BTreeMap::new());
     for l in out.lines() {
         let Some(rest) = l.strip_prefix("budget: ") else {
@@ -161,6 +164,7 @@ fn parse_run(out: &str, err: &str) -> Result<Run> {
                     n.parse().map_err(|_| format!("cannot read `{l}`"))?,
                 );
             }
+            ["scan", ..] => scan = rest.to_string(),
             ["state", name, n] => {
                 state.insert(
                     name.to_string(),
@@ -178,6 +182,7 @@ fn parse_run(out: &str, err: &str) -> Result<Run> {
         ));
     }
     Ok(Run {
+        scan,
         regions,
         stack,
         state,
@@ -490,6 +495,7 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
          firmware features: {}), instructions on QEMU {machine}",
         features.unwrap_or("none")
     );
+    println!("budgets: {}", run.scan);
     let w = rows.iter().map(|r| r.what.len()).max().unwrap_or(0);
     let wv = rows.iter().map(|r| r.value.len()).max().unwrap_or(0);
     let wt = rows.iter().map(|r| r.target.len()).max().unwrap_or(0);
