@@ -33,4 +33,8 @@ fn main() {
     println!("cargo:rustc-link-search={}", out.display());
     // Only the firmware's binaries are linked with cortex-m-rt's script.
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    // defmt's interned strings need its linker script (feature `defmt`).
+    if env::var_os("CARGO_FEATURE_DEFMT").is_some() {
+        println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    }
 }

@@ -108,10 +108,15 @@ impl BeamModel {
 
     fn prepare(&self, range_m: f32, z_star_m: f32) -> Option<Prepared> {
         let max = self.intr.max_range_m();
-        let z_star = if z_star_m.is_nan() {
+        // `clamp` written out: `f32::clamp` asserts `min <= max`, a panic path the compiler
+        // cannot remove (it does not know that validated intrinsics have `max > 0`);
+        // `cargo xtask nopanic` rejects it. Same result for every input.
+        let z_star = if z_star_m.is_nan() || z_star_m > max {
             max
+        } else if z_star_m < 0.0 {
+            0.0
         } else {
-            z_star_m.clamp(0.0, max)
+            z_star_m
         };
         match Reading::classify(range_m, max) {
             Reading::Invalid => None,

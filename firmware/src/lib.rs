@@ -14,6 +14,9 @@ pub mod reference_cases;
 
 use core::fmt;
 use cortex_m_semihosting::debug;
+// The defmt logger (RTT) for every program when the feature `defmt` is on.
+#[cfg(feature = "defmt")]
+use defmt_rtt as _;
 
 /// One reference case (see `host-tests/src/firmware_cases.rs`, which generates the table).
 #[derive(Clone, Copy, Debug)]
@@ -82,9 +85,67 @@ impl fmt::Display for Fixed {
 }
 
 /// Prints through semihosting (the host's stdout under QEMU).
+#[cfg(not(feature = "defmt"))]
 #[macro_export]
 macro_rules! println {
     ($($arg:tt)*) => { cortex_m_semihosting::hprintln!($($arg)*) };
+}
+
+/// Prints one line over defmt-RTT (feature `defmt`, for a board with a debug probe): the
+/// line is formatted with `core::fmt` into a [`LINE_BYTES`]-byte buffer and sent as one
+/// defmt string, so the output reads the same as under semihosting.
+#[cfg(feature = "defmt")]
+#[macro_export]
+macro_rules! println {
+    ($($arg:tt)*) => { $crate::defmt_line(format_args!($($arg)*)) };
+}
+
+/// Longest line [`println!`] sends over defmt; longer ones are cut and marked `[cut]`.
+#[cfg(feature = "defmt")]
+pub const LINE_BYTES: usize = 384;
+
+/// Formats `args` and sends the text as one defmt message (see [`println!`]).
+#[cfg(feature = "defmt")]
+pub fn defmt_line(args: fmt::Arguments<'_>) {
+    struct Line {
+        bytes: [u8; LINE_BYTES],
+        len: usize,
+        cut: bool,
+    }
+    impl fmt::Write for Line {
+        fn write_str(&mut self, s: &str) -> fmt::Result {
+            for ch in s.chars() {
+                let mut utf8 = [0u8; 4];
+                let enc = ch.encode_utf8(&mut utf8).as_bytes();
+                let end = self.len + enc.len();
+                match self.bytes.get_mut(self.len..end) {
+                    Some(dst) => {
+                        dst.copy_from_slice(enc);
+                        self.len = end;
+                    }
+                    None => {
+                        self.cut = true;
+                        return Ok(());
+                    }
+                }
+            }
+            Ok(())
+        }
+    }
+    let mut line = Line {
+        bytes: [0; LINE_BYTES],
+        len: 0,
+        cut: false,
+    };
+    let _ = fmt::write(&mut line, args);
+    // Whole characters only were copied, so this is UTF-8.
+    let text = line
+        .bytes
+        .get(..line.len)
+        .and_then(|b| core::str::from_utf8(b).ok())
+        .unwrap_or("");
+    let mark = if line.cut { " [cut]" } else { "" };
+    defmt::println!("{=str}{=str}", text, mark);
 }
 
 /// Ends the program: semihosting exit status 0 when `ok`, 1 otherwise.

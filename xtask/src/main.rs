@@ -1,6 +1,7 @@
 //! `cargo xtask`: project tasks that need more than `cargo test`: the firmware under QEMU,
 //! instruction counts, cross builds. Run `cargo xtask --help`.
 
+mod budgets;
 mod demo;
 
 use clap::{Parser, Subcommand};
@@ -86,6 +87,28 @@ enum Task {
         #[arg(long, value_enum, default_value = "mps2-an386")]
         board: demo::Board,
     },
+    /// Budgets of the scoring core against issue 7's targets, as a table: .text/.rodata/.bss
+    /// (size_core minus size_skeleton), stack high-water marks (painted stack), instructions
+    /// per pose and per beam (QEMU counting plugin), no heap, fits the STM32F405 layout.
+    ///
+    /// Exits non-zero only when a hard requirement fails (a heap, an image that does not fit);
+    /// targets not met yet are printed as OVER.
+    Budgets {
+        /// QEMU machine for the instruction counts and the stack.
+        #[arg(long, default_value = "mps2-an386")]
+        machine: String,
+        /// Firmware features to build with (e.g. `micromath`: micromath's sin/cos).
+        #[arg(long)]
+        features: Option<String>,
+    },
+    /// Link-time proof that the scoring core cannot panic: builds size_core (release, LTO)
+    /// with a panic handler that calls an undefined function; it must link.
+    Nopanic {
+        /// Instead, add a deliberate panicking index and check that the link then FAILS on the
+        /// undefined symbol (the proof can fail).
+        #[arg(long)]
+        show_failure: bool,
+    },
     /// Regenerate firmware/assets/ (Intel map blob and scans) from ../shared/data.
     DemoAssets,
     /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
@@ -101,7 +124,7 @@ enum Task {
         check: bool,
     },
     /// The firmware part of CI: refcases --check, modelcases --check, cross, qemu (check and
-    /// models), insns.
+    /// models), insns, budgets, nopanic (and nopanic --show-failure).
     Ci,
 }
 
@@ -116,6 +139,8 @@ fn main() -> ExitCode {
         Task::Insns { machine } => insns(&machine),
         Task::Cross => cross(),
         Task::Demo { board } => demo::demo(board),
+        Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
+        Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
         Task::DemoAssets => demo::demo_assets(),
         Task::Refcases { check } => refcases(check),
         Task::Modelcases { check } => modelcases(check),
@@ -124,7 +149,10 @@ fn main() -> ExitCode {
             .and_then(|()| cross())
             .and_then(|()| qemu("check", "mps2-an386", true))
             .and_then(|()| qemu("models", "mps2-an386", true))
-            .and_then(|()| insns("mps2-an386")),
+            .and_then(|()| insns("mps2-an386"))
+            .and_then(|()| budgets::budgets("mps2-an386", None))
+            .and_then(|()| budgets::nopanic(false))
+            .and_then(|()| budgets::nopanic(true)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -473,6 +501,9 @@ fn cross() -> Result {
     }
     // The firmware has no #[global_allocator]: a crate graph that used `alloc` would not link.
     let fw = features_of(&root.join("firmware/Cargo.toml"), "beamfield-firmware")?;
+    // `deliberate-panic` exists to make the no-panic link fail (`cargo xtask nopanic
+    // --show-failure`): it is not a feature a program is linked with.
+    let fw: Vec<String> = fw.into_iter().filter(|f| f != "deliberate-panic").collect();
     for f in std::iter::once(None).chain(fw.iter().map(|f| Some(f.as_str()))) {
         build_firmware(true, f)?;
         eprintln!(

@@ -27,7 +27,12 @@ use beamfield::{
 use beamfield_firmware::{exit, println, Fixed};
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::entry;
+#[cfg(not(feature = "defmt"))]
 use panic_semihosting as _;
+// On a board (feature `defmt`): panic messages over defmt-RTT, like the report (the logger is
+// linked by beamfield_firmware).
+#[cfg(feature = "defmt")]
+use panic_probe as _;
 
 /// One real scan of the log with its logged (corrected) laser pose.
 pub struct DemoScan {
