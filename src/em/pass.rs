@@ -207,10 +207,16 @@ impl<const G: usize> PassStats<G> {
         let u = d * th.inv_sigma;
         let l_hit = ln_w[0] + th.ln_peak - ln_hit_mass(s, th.zmax, th.inv_sigma) - 0.5 * u * u;
         let short_ok = s > 0.0 && z <= s;
-        let l_short = if short_ok {
-            ln_w[1] + th.ln_lambda - th.lambda * z - math::ln_f64(-math::expm1_f64(-th.lambda * s))
+        // The short normalizer at θ's λ, shared with the short probe when that is at the same λ
+        // (the E-step pass of the default update): one expm1 and one ln per reading, not two.
+        let short_norm = if short_ok {
+            Some(ShortNorm::new(th.lambda, s))
         } else {
-            f64::NEG_INFINITY
+            None
+        };
+        let l_short = match &short_norm {
+            Some(sn) => ln_w[1] + th.ln_lambda - th.lambda * z - sn.ln_one_minus,
+            None => f64::NEG_INFINITY,
         };
         let (l_max, l_rand) = if is_max {
             (ln_w[2], f64::NEG_INFINITY)
@@ -255,7 +261,11 @@ impl<const G: usize> PassStats<G> {
         }
         if let Some(sp) = &probe.short {
             if e_short > 0.0 {
-                let c = short_curve(sp, z, s);
+                let norm = match short_norm {
+                    Some(sn) if sp.lambda == th.lambda => sn,
+                    _ => ShortNorm::new(sp.lambda, s),
+                };
+                let c = short_curve(sp, z, s, &norm);
                 for (a, b) in self.short_curve.iter_mut().zip(c) {
                     *a += e_short * b;
                 }
@@ -340,19 +350,40 @@ fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64) -> Curve {
 ///
 /// (concave: with `x = λz*`, `x²e^x/(e^x − 1)² = ((x/2)/sinh(x/2))² ≤ 1`).
 ///
-/// `1 − e^{−x}` is formed as `(e^x − 1)/(e^x − 1 + 1)`: one `expm1`, no cancellation.
+/// `norm` is [`ShortNorm`] at `(sp.lambda, s)`.
 #[inline]
-fn short_curve(sp: &ShortProbe, z: f64, s: f64) -> Curve {
+fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm) -> Curve {
     let lambda = sp.lambda;
-    let x = lambda * s;
-    let em1 = math::expm1_f64(x);
-    let one_minus = if em1.is_finite() {
-        em1 / (em1 + 1.0)
-    } else {
-        1.0
-    };
-    let q = sp.ln_lambda - lambda * z - math::ln_f64(one_minus);
-    let g = sp.inv_lambda - z - s / em1;
-    let h = -sp.inv_lambda2 + s * s / (em1 * one_minus);
+    let q = sp.ln_lambda - lambda * z - norm.ln_one_minus;
+    let g = sp.inv_lambda - z - s / norm.em1;
+    let h = -sp.inv_lambda2 + s * s / (norm.em1 * norm.one_minus);
     [q, g, h]
+}
+
+/// The truncation normalizer of the short component at rate λ and wall `z* > 0`:
+/// `1 − e^{−λz*}`, formed as `(e^x − 1)/(e^x − 1 + 1)` with `x = λz*` (one `expm1`, no
+/// cancellation; `1` once `e^x` overflows), its logarithm, and `e^x − 1` itself (which the
+/// λ-derivatives of [`short_curve`] need).
+#[derive(Clone, Copy, Debug)]
+struct ShortNorm {
+    em1: f64,
+    one_minus: f64,
+    ln_one_minus: f64,
+}
+
+impl ShortNorm {
+    #[inline]
+    fn new(lambda: f64, s: f64) -> Self {
+        let em1 = math::expm1_f64(lambda * s);
+        let one_minus = if em1.is_finite() {
+            em1 / (em1 + 1.0)
+        } else {
+            1.0
+        };
+        Self {
+            em1,
+            one_minus,
+            ln_one_minus: math::ln_f64(one_minus),
+        }
+    }
 }

@@ -21,14 +21,18 @@ const CROSS_TARGETS: [&str; 4] = [
 ];
 /// Seconds before a QEMU run is killed (a hung program then fails with status 124).
 const QEMU_TIMEOUT_S: &str = "120";
-/// Beams per scan in `firmware/src/bin/insns.rs`.
+/// Beams per scan in `firmware/src/bin/insns.rs` (regions 0–3).
 const INSNS_BEAMS: u64 = 360;
-/// What each measured region of `insns.rs` does, in order.
-const INSNS_REGIONS: [&str; 4] = [
-    "empty loop (sum of ranges)",
-    "ln per beam (math::ln)",
-    "exp per beam (math::exp)",
-    "beam mixture, given z*",
+/// Beams of region 4: the 8 real Intel scans of 180 beams (`firmware/assets/scans.rs`).
+const INSNS_INTEL_BEAMS: u64 = 8 * 180;
+/// What each measured region of `insns.rs` does, in order, and how many beams it scores.
+const INSNS_REGIONS: [(&str, u64); 5] = [
+    ("empty loop (sum of ranges)", INSNS_BEAMS),
+    ("ln per beam (math::ln)", INSNS_BEAMS),
+    ("exp per beam (math::exp)", INSNS_BEAMS),
+    ("beam mixture, given z*", INSNS_BEAMS),
+    // Issue 4's race: real scans, real map, z* cast on the device.
+    ("beam model + ray cast, Intel", INSNS_INTEL_BEAMS),
 ];
 
 type Result<T = ()> = std::result::Result<T, String>;
@@ -439,13 +443,16 @@ fn insns(machine: &str) -> Result {
         ));
     }
     let per_beam = |n: u64| n as f64 / INSNS_BEAMS as f64;
-    println!("\ninstructions on {machine} ({FIRMWARE_TARGET}, release), {INSNS_BEAMS} beams:");
+    println!("\ninstructions on {machine} ({FIRMWARE_TARGET}, release):");
     println!(
-        "{:<3} {:<30} {:>12} {:>10}",
-        "#", "region", "total", "per beam"
+        "{:<3} {:<30} {:>6} {:>12} {:>10}",
+        "#", "region", "beams", "total", "per beam"
     );
-    for (i, (name, n)) in INSNS_REGIONS.iter().zip(&counts).enumerate() {
-        println!("{i:<3} {name:<30} {n:>12} {:>10.1}", per_beam(*n));
+    for (i, ((name, beams), n)) in INSNS_REGIONS.iter().zip(&counts).enumerate() {
+        println!(
+            "{i:<3} {name:<30} {beams:>6} {n:>12} {:>10.1}",
+            *n as f64 / *beams as f64
+        );
     }
     let (empty, ln, mixture) = (counts[0], counts[1], counts[3]);
     println!(
@@ -453,6 +460,12 @@ fn insns(machine: &str) -> Result {
         per_beam(mixture),
         per_beam(mixture.saturating_sub(empty)),
         mixture as f64 / ln as f64
+    );
+    let race = counts[4];
+    println!(
+        "beam model with on-device ray casting (real Intel map and scans): {:.1} instructions per beam (the mixture alone, given z*, on the synthetic scan: {:.1})",
+        race as f64 / INSNS_INTEL_BEAMS as f64,
+        per_beam(mixture)
     );
     Ok(())
 }

@@ -6,7 +6,11 @@
 //! 0. empty loop: sum the ranges, +∞ read as the max range (the loop and load cost alone);
 //! 1. `beamfield::math::ln` of each range (the host bench's baseline);
 //! 2. `beamfield::math::exp` of each range;
-//! 3. `BeamModel::scan_log_likelihood`: the beam mixture, AMCL default intrinsics, 30 m lidar.
+//! 3. `BeamModel::scan_log_likelihood`: the beam mixture, AMCL default intrinsics, 30 m lidar;
+//! 4. `BeamFieldModel` (issue 4's race): the beam model *with* ray casting through the real Intel
+//!    map blob (`firmware/assets/intel.bin`), scoring the 8 real scans of `firmware/assets/scans.rs`
+//!    (180 beams each, 1,440 beams) at their logged poses, with the intrinsics EM fitted on that
+//!    log. Self-contained: its data and constants live in the module [`intel`].
 #![no_std]
 #![no_main]
 
@@ -49,6 +53,83 @@ fn synthetic(rng: &mut Rng, ranges: &mut [f32; BEAMS], z_star: &mut [f32; BEAMS]
             MAX_RANGE_M * rng.unit()
         };
     }
+}
+
+/// Region 4's data: the demo's real scans and map blob, and the beam model fitted on that log.
+mod intel {
+    /// Beams per FLASER scan of the Intel log.
+    pub const BEAMS: usize = 180;
+    /// One real scan of the log with its logged laser pose (the shape `scans.rs` fills).
+    pub struct DemoScan {
+        /// Index of the FLASER line in the log.
+        #[allow(dead_code)]
+        pub log_index: u32,
+        /// Logged laser pose `[x_m, y_m, theta_rad]`.
+        pub pose: [f32; 3],
+        /// The ranges, metres.
+        pub ranges_m: [f32; BEAMS],
+    }
+    include!("../../assets/scans.rs");
+    /// The 5 cm distance field of the Intel map, as the demo links it.
+    pub static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
+    /// `[z_hit, z_short, z_max, z_rand]`, σ_hit (m), λ_short (1/m): `beamfield fit` on the log
+    /// (docs/beam-on-device.md, truncated update).
+    pub const WEIGHTS: [f32; 4] = [0.878328, 0.057550, 0.023807, 0.040316];
+    /// σ_hit, metres.
+    pub const SIGMA_HIT_M: f32 = 0.058836;
+    /// λ_short, 1/m.
+    pub const LAMBDA_SHORT: f32 = 0.070119;
+}
+
+/// Region 4: scores every embedded real scan at its logged pose with the beam model and
+/// on-device ray casting, between the markers. Returns the summed log-likelihood and the beams
+/// scored, or `None` if the blob, intrinsics or a scan were rejected (reported by the caller).
+/// Not inlined, so adding it leaves the code of `main`'s regions 0–3 as it was.
+#[inline(never)]
+fn beam_model_with_ray_casting() -> Option<(f32, usize)> {
+    use beamfield::{
+        BeamFieldModel, BeamLayout, FieldView, Pose, RayCaster, SensorModel, SensorMount,
+    };
+    let caster = RayCaster::new(FieldView::parse(intel::BLOB).ok()?).ok()?;
+    let s: f32 = intel::WEIGHTS.iter().sum();
+    let w = intel::WEIGHTS.map(|x| x / s);
+    let intr = BeamIntrinsics::new(
+        w[0],
+        w[1],
+        w[2],
+        w[3],
+        intel::SIGMA_HIT_M,
+        intel::LAMBDA_SHORT,
+        intel::MAX_RANGE_M,
+    )
+    .ok()?;
+    let model = BeamFieldModel::new(BeamModel::new(intr), caster);
+    // CARMEN FLASER: beam i at −90° + i·1°; the logged poses are the laser's (no mount).
+    let layout = BeamLayout::<{ intel::BEAMS }>::uniform(
+        -core::f32::consts::FRAC_PI_2,
+        core::f32::consts::PI / intel::BEAMS as f32,
+        intel::BEAMS,
+        intel::MAX_RANGE_M,
+        SensorMount::CENTERED,
+    )
+    .ok()?;
+    let mut scans = [const { None }; intel::SCANS.len()];
+    for (slot, d) in scans.iter_mut().zip(intel::SCANS.iter()) {
+        let scan = Scan::<{ intel::BEAMS }>::from_ranges(&d.ranges_m).ok()?;
+        *slot = Some((scan, Pose::new(d.pose[0], d.pose[1], d.pose[2])));
+    }
+    let scans = black_box(&scans);
+
+    bench_mark_start();
+    let mut sum = 0.0f32;
+    let mut scored = 0usize;
+    for (scan, pose) in scans.iter().flatten() {
+        let score = model.score(&layout, scan, pose);
+        sum += score.log_likelihood;
+        scored += usize::from(score.scored);
+    }
+    bench_mark_end();
+    Some((sum, scored))
 }
 
 #[entry]
@@ -107,5 +188,20 @@ fn main() -> ! {
         score.scored,
         score.invalid
     );
-    exit(score.log_likelihood.is_finite() && usize::from(score.scored) == BEAMS)
+    let mixture_ok = score.log_likelihood.is_finite() && usize::from(score.scored) == BEAMS;
+
+    // Region 4 (issue 4's race): the beam model with ray casting on the real Intel map.
+    let Some((race_ll, race_scored)) = beam_model_with_ray_casting() else {
+        println!("insns: region 4: Intel blob, intrinsics or scans rejected");
+        exit(false)
+    };
+    println!(
+        "insns: region 4 beam model with ray casting, Intel map: {} scans x {} beams, log-likelihood {}, {} scored",
+        intel::SCANS.len(),
+        intel::BEAMS,
+        Fixed::new(f64::from(race_ll), 3),
+        race_scored
+    );
+    let race_ok = race_ll.is_finite() && race_scored == intel::SCANS.len() * intel::BEAMS;
+    exit(mixture_ok && race_ok)
 }

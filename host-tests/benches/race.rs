@@ -1,0 +1,98 @@
+//! The race of the chapter (§6.4) on a real map and real scans: the beam model with on-device
+//! ray casting (`BeamFieldModel`) against the likelihood field (`LikelihoodField::score`), both
+//! scoring whole scans of the Intel lab log at their logged poses, against the demo firmware's
+//! blob of the Intel map. Baselines measured in the same run over the same readings: a loop
+//! that only sums the ranges, and one `f32::ln` per beam (as `benches/beam.rs`).
+//!
+//! Run: `cargo bench -p host-tests --bench race`. One iteration scores all 91 scans (every 10th
+//! of the 910, 16,380 beams): criterion's "thrpt" is in scan evaluations per second (÷1000:
+//! evaluations per ms); ns/beam = time per iteration / 16,380. Quote ratios to the baselines,
+//! not absolute times across machines.
+//!
+//! Also measured: the ray casts alone (`BeamFieldModel::cast_layout`), to split the beam
+//! model's cost into z* and mixture.
+
+#[path = "../common/intel_race.rs"]
+mod intel_race;
+
+use beamfield::{SensorModel, Stride};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use intel_race::N;
+use std::hint::black_box;
+
+fn race(c: &mut Criterion) {
+    let data = intel_race::load();
+    let (beam, field) = intel_race::models(&data);
+    let scans = &data.scans;
+    let layout = &data.layout;
+    let max = data.max_range_m;
+    let beams = scans.len() * N;
+    // Both models' totals once, so a reader sees what is being computed (and that it is finite).
+    let (mut ll_beam, mut ll_field) = (0.0f64, 0.0f64);
+    for (_, scan, pose) in scans {
+        ll_beam += f64::from(beam.score(layout, scan, pose).log_likelihood);
+        ll_field += f64::from(field.score(layout, scan, pose).log_likelihood);
+    }
+    eprintln!(
+        "race: {} scans x {N} beams = {beams} beams per iteration; total log-likelihood: beam model {ll_beam:.1}, likelihood field {ll_field:.1}",
+        scans.len()
+    );
+
+    let mut g = c.benchmark_group("race_intel");
+    g.throughput(Throughput::Elements(scans.len() as u64));
+    g.bench_function("baseline_sum_ranges", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for (_, scan, _) in black_box(scans) {
+                acc += scan.ranges_m().iter().map(|&z| z.min(max)).sum::<f32>();
+            }
+            acc
+        })
+    });
+    g.bench_function("baseline_ln_per_beam", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for (_, scan, _) in black_box(scans) {
+                acc += scan
+                    .ranges_m()
+                    .iter()
+                    .map(|&z| z.min(max).ln())
+                    .sum::<f32>();
+            }
+            acc
+        })
+    });
+    g.bench_function("likelihood_field", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for (_, scan, pose) in scans {
+                acc += field.score(layout, scan, black_box(pose)).log_likelihood;
+            }
+            acc
+        })
+    });
+    g.bench_function("beam_model_raycast", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for (_, scan, pose) in scans {
+                acc += beam.score(layout, scan, black_box(pose)).log_likelihood;
+            }
+            acc
+        })
+    });
+    let mut z_star = [0.0f32; N];
+    g.bench_function("raycast_only", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for (_, _, pose) in scans {
+                beam.cast_layout(layout, black_box(pose), Stride::ONE, &mut z_star);
+                acc += z_star.iter().sum::<f32>();
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, race);
+criterion_main!(benches);
