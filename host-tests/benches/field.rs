@@ -203,7 +203,7 @@ fn transform(c: &mut Criterion) {
                     EdtScratch {
                         sites: &mut a,
                         bounds: &mut bb,
-                        line: &mut l,
+                        heights: &mut l,
                     },
                 )
                 .unwrap();
