@@ -1,7 +1,9 @@
 //! Likelihood field ns/beam next to an AMCL-style f64 loop on the same distance data, the exact
 //! transform on a 400 × 400 grid and on the Willow map, and blob bytes per cell.
 //!
-//! Run: `cargo bench -p host-tests --bench field -- --warm-up-time 1 --measurement-time 3`.
+//! Run: `cargo bench -p host-tests --bench field -- --warm-up-time 1 --measurement-time 3`
+//! (`-- exact_edt ...` for the transform alone). Each transform runs next to a baseline of two
+//! plain passes over the same grid (copy, then sum), so its time is also a ratio to that.
 //! Per-beam figures: criterion's "thrpt" line is in beams per second (elements); ns/beam is its
 //! inverse. The ratio to report is the AMCL-style time over the likelihood-field time.
 
@@ -183,6 +185,14 @@ fn transform(c: &mut Criterion) {
         let (mut a, mut bb, mut l) = (vec![0u32; n], vec![0i64; n], vec![0u32; n]);
         let mut grid = seeds.clone();
         g.throughput(Throughput::Elements((w * h) as u64));
+        // Baseline for the ratio: the same copy of the seeds each iteration does, plus one
+        // read of every cell (a wrapping sum), i.e. two passes over the grid in memory order.
+        g.bench_function(format!("{name}_copy_sum_baseline"), |b| {
+            b.iter(|| {
+                grid.copy_from_slice(seeds);
+                black_box(grid.iter().fold(0u32, |a, &v| a.wrapping_add(v)))
+            })
+        });
         g.bench_function(name, |b| {
             b.iter(|| {
                 grid.copy_from_slice(seeds);
@@ -193,7 +203,7 @@ fn transform(c: &mut Criterion) {
                     EdtScratch {
                         sites: &mut a,
                         bounds: &mut bb,
-                        line: &mut l,
+                        heights: &mut l,
                     },
                 )
                 .unwrap();

@@ -88,7 +88,7 @@ pub fn room_blob() -> Vec<u8> {
         EdtScratch {
             sites: &mut a,
             bounds: &mut b,
-            line: &mut c,
+            heights: &mut c,
         },
     )
     .expect("room transform");

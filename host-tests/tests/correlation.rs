@@ -9,9 +9,7 @@ use beamfield::{BeamLayout, Pose, Scan, SensorModel, SensorMount};
 use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::field_cmd::build_blob;
 use beamfield_tools::map::{Occupancy, OccupancyMap};
-use beamfield_tools::mapping::{
-    build_from_log, Cell, MappingOptions, FREE_THRESH, OCCUPIED_THRESH,
-};
+use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 
 struct Rng(u64);
 impl Rng {
@@ -181,23 +179,7 @@ fn intel() -> Intel {
     let options = MappingOptions::new(log.max_range.value_m().unwrap());
     let (grid, _) = build_from_log(&log, &options, |_, _| {}).unwrap();
     let grid = grid.to_occupancy(OCCUPIED_THRESH, FREE_THRESH);
-    let g = grid.geometry();
-    let map = OccupancyMap {
-        width: g.width as u32,
-        height: g.height as u32,
-        resolution_m: g.resolution_m,
-        origin_x_m: g.origin_x_m,
-        origin_y_m: g.origin_y_m,
-        cells: grid
-            .cells()
-            .iter()
-            .map(|c| match c {
-                Cell::Occupied => Occupancy::Occupied,
-                Cell::Free => Occupancy::Free,
-                Cell::Unknown => Occupancy::Unknown,
-            })
-            .collect(),
-    };
+    let map = OccupancyMap::from_grid(&grid);
     Intel { log, map }
 }
 

@@ -21,7 +21,7 @@ fn transform(seeds_mask: &[bool], w: usize, h: usize) -> Vec<u32> {
         EdtScratch {
             sites: &mut a,
             bounds: &mut b,
-            line: &mut c,
+            heights: &mut c,
         },
     )
     .unwrap();
@@ -151,4 +151,29 @@ fn willow_crops_and_samples_bit_for_bit() {
         checked += 1;
     }
     assert!(checked > 10_000);
+}
+
+/// Larger random grids than the proptest's, whole, against brute force: at 3 % occupied (the
+/// bench's density) almost every row is settled by the row pass's bounded window search; at
+/// 0.3 % most rows are not and fall back to the envelope, so both paths and their switching
+/// are checked on every cell.
+#[test]
+fn large_random_grids_bit_for_bit() {
+    for (w, h, density, seed) in [
+        (230usize, 170usize, 0.03f64, 3u64),
+        (230, 170, 0.003, 5),
+        (61, 300, 0.01, 9),
+    ] {
+        let mut s = seed;
+        let mask: Vec<bool> = (0..w * h)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((s >> 11) as f64 / (1u64 << 53) as f64) < density
+            })
+            .collect();
+        assert!(mask.iter().any(|&o| o));
+        check(&mask, w, h);
+    }
 }

@@ -34,8 +34,9 @@ use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, SensorMount};
 use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::field_cmd::build_blob;
+use beamfield_tools::map::OccupancyMap;
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
-use beamfield_tools::pose_grid::{argmax, occupancy_map, score_grid, GridSpec};
+use beamfield_tools::pose_grid::{argmax, score_grid, GridSpec};
 
 const N: usize = 180;
 
@@ -63,7 +64,7 @@ fn best_grid_pose_is_the_logged_pose_on_a_map_of_its_pass() {
         let mut pass = log.clone();
         pass.scans = vec![s.clone()];
         let (grid, _) = build_from_log(&pass, &MappingOptions::new(max_range), |_, _| {}).unwrap();
-        let map = occupancy_map(&grid.to_occupancy(OCCUPIED_THRESH, FREE_THRESH));
+        let map = OccupancyMap::from_grid(&grid.to_occupancy(OCCUPIED_THRESH, FREE_THRESH));
         let blob = build_blob(&map, 2.0).unwrap();
         let lf = LikelihoodField::new(FieldView::parse(&blob).unwrap(), params);
         let scan = s.to_scan::<N>().unwrap();

@@ -11,6 +11,10 @@
 //! `min over occupied (i', j') of (i − i')² + (j − j')²` bit for bit
 //! (`host-tests/tests/field_edt.rs` checks it on random grids and real maps).
 //!
+//! On a plain occupancy grid the column pass is two sweeps over whole rows, and a row is first
+//! tried with a bounded, vectorizable window search that is exact whenever its results are small
+//! enough (see [`squared_edt`]); the envelope handles every other row.
+//!
 //! Memory belongs to the caller: the grid is transformed in place and three scratch slices of
 //! [`edt_scratch_len`] elements are passed in. No allocation, no panic.
 
@@ -61,17 +65,18 @@ pub const fn edt_scratch_len(width: usize, height: usize) -> usize {
     }
 }
 
-/// Caller-owned scratch memory for [`squared_edt`].
+/// Caller-owned scratch memory for [`squared_edt`]: the lower envelope of one row or column.
 ///
-/// Each slice must hold at least [`edt_scratch_len`]`(width, height)` elements; longer is fine.
+/// Each slice must hold at least [`edt_scratch_len`]`(width, height)` elements (one more than
+/// the longest line, for a sentinel); longer is fine.
 #[derive(Debug)]
 pub struct EdtScratch<'a> {
-    /// Positions of the parabolas of the lower envelope (F&H's `v`).
+    /// Positions of the parabolas of the lower envelope (F&H's `v`), cells.
     pub sites: &'a mut [u32],
-    /// Numerators of the envelope's breakpoints (F&H's `z`, as exact rationals).
+    /// Numerators of the envelope's breakpoints (F&H's `z`, as exact rationals), squared cells.
     pub bounds: &'a mut [i64],
-    /// One row or column of input values, copied out of the grid.
-    pub line: &'a mut [u32],
+    /// Each envelope parabola's own value `f(p)` at its site, squared cells.
+    pub heights: &'a mut [u32],
 }
 
 /// Transforms `grid` in place into exact squared Euclidean distances, in cell units.
@@ -79,6 +84,12 @@ pub struct EdtScratch<'a> {
 /// `grid` is row-major, `width` cells per row, `height` rows (the row order does not matter to
 /// the transform). See [`EDT_INFINITY`] for the input and output conventions. An empty grid
 /// (`width` or `height` 0, `grid` empty) is accepted and left as it is.
+///
+/// A plain occupancy grid (every cell 0 or [`EDT_INFINITY`]) takes a fast path that reads and
+/// writes the grid in memory order: the distance down each column comes from two sweeps over
+/// whole rows, and each row is first tried with a branch-free search of the 12 cells on either
+/// side, which is exact when every result is at most 13² (nothing farther can do better); a row
+/// where it is not goes to the envelope. Timings: `host-tests/benches/field.rs`.
 ///
 /// # Exactness
 /// All arithmetic is integer: parabola intersections are rationals compared by
@@ -101,38 +112,56 @@ pub fn squared_edt(
         return Err(EdtError::TooLarge);
     }
     let need = edt_scratch_len(width, height);
-    if scratch.sites.len() < need || scratch.bounds.len() < need || scratch.line.len() < need {
+    if scratch.sites.len() < need || scratch.bounds.len() < need || scratch.heights.len() < need {
         return Err(EdtError::ScratchTooSmall);
     }
     if grid.is_empty() {
         return Ok(());
     }
-    let EdtScratch {
-        sites,
-        bounds,
-        line,
-    } = scratch;
-    if grid.iter().all(|&v| v == 0 || v == EDT_INFINITY) {
-        // A plain occupancy grid: the column pass is the distance to the nearest seed in the
-        // same column, found by two sweeps over whole rows (cache-friendly, vectorizable).
+    let mut env = Envelope {
+        sites: scratch.sites,
+        bounds: scratch.bounds,
+        heights: scratch.heights,
+    };
+    // Whether every cell is 0 or EDT_INFINITY (both map to 0 or 1 under `v + 1`), checked a
+    // block at a time without an early exit inside a block, so the check vectorizes.
+    let binary = grid
+        .chunks(256)
+        .all(|b| b.iter().fold(true, |ok, &v| ok & (v.wrapping_add(1) <= 1)));
+    if binary {
+        // A plain occupancy grid: each cell gets its squared distance to the nearest seed in
+        // its column, then every row takes the minimum over the row (see `window_row`).
         binary_columns(grid, width);
-    } else {
-        // General sampled function: the lower envelope down every column x, x + w, x + 2w, …
-        for x in 0..width {
-            for (dst, &src) in line.iter_mut().zip(grid.iter().skip(x).step_by(width)) {
-                *dst = src;
+        let mut envelope_rows = 0usize;
+        for row in grid.chunks_exact_mut(width) {
+            if envelope_rows == 0 {
+                if let Some(out) = env.heights.get_mut(..width) {
+                    if window_row(row, out) {
+                        for (c, &v) in row.iter_mut().zip(out.iter()) {
+                            *c = v;
+                        }
+                        continue;
+                    }
+                }
+                // The window did not settle this row: the next rows, likely as sparse, go
+                // straight to the envelope (a speed choice only; both give the same values).
+                envelope_rows = ENVELOPE_ROWS_AFTER_MISS;
+            } else {
+                envelope_rows -= 1;
             }
-            let input = line.get(..height).unwrap_or(&[]);
-            transform_line(input, grid.iter_mut().skip(x).step_by(width), sites, bounds);
+            let count = env.build(row.iter().copied());
+            env.write(count, row.iter_mut());
         }
-    }
-    // Rows.
-    for row in grid.chunks_exact_mut(width) {
-        for (dst, &src) in line.iter_mut().zip(row.iter()) {
-            *dst = src;
+    } else {
+        // General sampled function: the envelope down every column x, x + w, x + 2w, …
+        for x in 0..width {
+            let count = env.build(grid.iter().skip(x).step_by(width).copied());
+            env.write(count, grid.iter_mut().skip(x).step_by(width));
         }
-        let input = line.get(..width).unwrap_or(&[]);
-        transform_line(input, row.iter_mut(), sites, bounds);
+        for row in grid.chunks_exact_mut(width) {
+            let count = env.build(row.iter().copied());
+            env.write(count, row.iter_mut());
+        }
     }
     Ok(())
 }
@@ -140,18 +169,18 @@ pub fn squared_edt(
 /// The column pass for a grid of 0 (seed) and [`EDT_INFINITY`]: each cell gets the squared
 /// distance to the nearest seed in its column, or [`EDT_INFINITY`] if the column has none.
 ///
-/// A downward sweep keeps the distance (in cells) to the nearest seed at or below each row, an
-/// upward sweep takes the minimum with the nearest seed above; then the distances are squared.
-/// Distances stay below [`EDT_MAX_SIDE`], so `EDT_INFINITY` (saturating) marks "no seed".
+/// A downward sweep keeps the distance in cells to the nearest seed at or above each row
+/// index, an upward sweep takes the minimum with the nearest seed on the other side and squares
+/// each row once the row above it no longer needs it. Distances stay below [`EDT_MAX_SIDE`], so
+/// `EDT_INFINITY` (saturating) marks "no seed".
 fn binary_columns(grid: &mut [u32], width: usize) {
     // Down: rows in increasing order; row 0 keeps its value (0 or "none").
     let mut prev: Option<&mut [u32]> = None;
     for row in grid.chunks_exact_mut(width) {
         if let Some(p) = prev {
+            // The cell is 0 (stays 0) or EDT_INFINITY (becomes one more than the cell above).
             for (c, &a) in row.iter_mut().zip(p.iter()) {
-                if *c != 0 {
-                    *c = a.saturating_add(1);
-                }
+                *c = (*c).min(a.saturating_add(1));
             }
         }
         prev = Some(row);
@@ -160,92 +189,206 @@ fn binary_columns(grid: &mut [u32], width: usize) {
     let mut next: Option<&mut [u32]> = None;
     for row in grid.chunks_exact_mut(width).rev() {
         if let Some(n) = next {
-            for (c, &b) in row.iter_mut().zip(n.iter()) {
+            for (c, b) in row.iter_mut().zip(n.iter_mut()) {
                 *c = (*c).min(b.saturating_add(1));
+                *b = square_or_none(*b);
             }
         }
         next = Some(row);
     }
-    for c in grid.iter_mut() {
-        *c = c.saturating_mul(*c);
+    if let Some(first) = next {
+        for c in first.iter_mut() {
+            *c = square_or_none(*c);
+        }
     }
 }
 
-/// The 1-D transform of `f` (values, [`EDT_INFINITY`] = no seed), written to `out` in order.
+/// `g²` for a column distance `g < EDT_MAX_SIDE`, [`EDT_INFINITY`] for [`EDT_INFINITY`]: a
+/// select rather than `saturating_mul`, so the loops around it vectorize.
+fn square_or_none(g: u32) -> u32 {
+    let sq = g.wrapping_mul(g);
+    if g == EDT_INFINITY {
+        EDT_INFINITY
+    } else {
+        sq
+    }
+}
+
+/// The half-width, in cells, of the window [`window_row`] searches.
+const WINDOW: usize = 12;
+
+/// A windowed minimum at most this is exact: every cell more than [`WINDOW`] columns away adds
+/// at least `(WINDOW + 1)²` on its own. Squared cells.
+const WINDOW_EXACT_UP_TO: u32 = ((WINDOW + 1) * (WINDOW + 1)) as u32;
+
+/// How many rows skip the window and go to the envelope after a row the window did not settle.
+const ENVELOPE_ROWS_AFTER_MISS: usize = 8;
+
+/// The row pass by a bounded search: `out[x] = min over |d| ≤ WINDOW of row[x + d] + d²`, with
+/// `row` the column pass's squared distances. Returns whether every `out[x]` is at most
+/// [`WINDOW_EXACT_UP_TO`]; then every `out[x]` is the exact row minimum (cells outside the
+/// window cannot beat it). Otherwise `out` is not the answer and the caller runs the envelope.
 ///
-/// The lower envelope is kept as `count` parabolas at `sites[0..count]`; parabola `k ≥ 1`
-/// becomes the lowest at the real abscissa `s_k = bounds[k] / (2·(sites[k] − sites[k−1]))`
-/// (the intersection with its left neighbour; `s_0 = −∞`). Intersections are compared by
-/// cross-multiplication, exactly, in `i64`: numerators stay below 2³², denominators below 2¹⁷.
-/// `sites` and `bounds` hold at least `f.len()` elements (checked by the caller).
-fn transform_line<'o>(
-    f: &[u32],
-    out: impl Iterator<Item = &'o mut u32>,
-    sites: &mut [u32],
-    bounds: &mut [i64],
-) {
-    let height =
-        |p: i64| -> i64 { f.get(p as usize).copied().map_or(i64::MAX / 4, i64::from) + p * p };
-    let site = |sites: &[u32], k: usize| i64::from(sites.get(k).copied().unwrap_or(0));
-    let mut count = 0usize;
-    for (q, &fq) in f.iter().enumerate() {
-        if fq == EDT_INFINITY {
-            continue;
-        }
-        let q = q as i64;
-        let hq = i64::from(fq) + q * q;
-        let mut num = 0i64;
-        while count > 0 {
-            let k = count - 1;
-            let p = site(sites, k);
-            // Intersection of parabola p with the new one: num / (2·(q − p)).
-            num = hq - height(p);
-            if k == 0 {
-                break;
-            }
-            let den = 2 * (q - p);
-            let num_k = bounds.get(k).copied().unwrap_or(i64::MIN);
-            let den_k = 2 * (p - site(sites, k - 1));
-            // Pop p when the new parabola takes over no later than p did: s ≤ s_k.
-            if num * den_k <= num_k * den {
-                count -= 1;
-            } else {
-                break;
-            }
-        }
-        if let Some(v) = sites.get_mut(count) {
-            *v = q as u32;
-        }
-        if let Some(b) = bounds.get_mut(count) {
-            *b = num;
-        }
-        count += 1;
+/// Branch-free loops over whole slices, so they vectorize; on a grid whose every cell has a seed
+/// within about [`WINDOW`] cells this costs a fraction of the envelope's data-dependent loop.
+/// `out` is as long as `row` (the caller passes a scratch slice cut to the row's length).
+fn window_row(row: &[u32], out: &mut [u32]) -> bool {
+    for (o, &v) in out.iter_mut().zip(row.iter()) {
+        *o = v;
     }
-    if count == 0 {
-        for o in out {
-            *o = EDT_INFINITY;
+    for d in 1..=WINDOW {
+        let d2 = (d * d) as u32;
+        // Cells d to the right of x.
+        for (o, &v) in out.iter_mut().zip(row.get(d..).unwrap_or(&[])) {
+            *o = (*o).min(v.saturating_add(d2));
         }
-        return;
+        // Cells d to the left of x.
+        for (o, &v) in out
+            .get_mut(d..)
+            .unwrap_or(&mut [])
+            .iter_mut()
+            .zip(row.iter())
+        {
+            *o = (*o).min(v.saturating_add(d2));
+        }
     }
-    // Read it back: move to parabola k + 1 while s_{k+1} < q.
-    let mut k = 0usize;
-    let mut p = site(sites, 0);
-    let mut fp = height(p) - p * p;
-    for (q, o) in out.enumerate() {
-        let q = q as i64;
-        while k + 1 < count {
-            let next = site(sites, k + 1);
-            let num = bounds.get(k + 1).copied().unwrap_or(i64::MAX);
-            if num < q * 2 * (next - p) {
+    out.iter()
+        .fold(true, |ok, &v| ok & (v <= WINDOW_EXACT_UP_TO))
+}
+
+/// The lower envelope of the parabolas `(x − p)² + f(p)` of one line (F&H's 1-D transform),
+/// kept as a stack in the caller's scratch: parabola `k` sits at `sites[k]` with value
+/// `heights[k]` there, and for `k ≥ 1` becomes the lowest at the real abscissa
+/// `s_k = bounds[k] / (2·(sites[k] − sites[k−1]))` (its intersection with parabola `k − 1`;
+/// `s_0 = −∞`). Numerators stay below 2³² in magnitude and denominators below 2¹⁷, so the
+/// cross-multiplied comparisons are exact in `i64`.
+///
+/// Every slice holds at least one more element than the line is long (checked by
+/// [`squared_edt`]); the `get` fallbacks below are never taken.
+struct Envelope<'a> {
+    sites: &'a mut [u32],
+    bounds: &'a mut [i64],
+    heights: &'a mut [u32],
+}
+
+/// The top parabola of the envelope while it is built: site `p`, `h = f(p) + p²`, and its
+/// breakpoint `num / den` against the parabola below it (meaningless for the bottom one).
+#[derive(Clone, Copy)]
+struct Top {
+    p: i64,
+    h: i64,
+    num: i64,
+    den: i64,
+}
+
+impl Envelope<'_> {
+    fn site(&self, k: usize) -> i64 {
+        i64::from(self.sites.get(k).copied().unwrap_or(0))
+    }
+
+    fn height(&self, k: usize) -> i64 {
+        i64::from(self.heights.get(k).copied().unwrap_or(0))
+    }
+
+    /// Parabola `k` as the top of the stack (`k ≥ 1`, so it has one below it).
+    fn top(&self, k: usize) -> Top {
+        let p = self.site(k);
+        Top {
+            p,
+            h: self.height(k) + p * p,
+            num: self.bounds.get(k).copied().unwrap_or(0),
+            den: 2 * (p - self.site(k.wrapping_sub(1))),
+        }
+    }
+
+    fn set(&mut self, k: usize, site: u32, height: u32, bound: i64) {
+        if let Some(v) = self.sites.get_mut(k) {
+            *v = site;
+        }
+        if let Some(v) = self.heights.get_mut(k) {
+            *v = height;
+        }
+        if let Some(v) = self.bounds.get_mut(k) {
+            *v = bound;
+        }
+    }
+
+    /// Builds the envelope of `values` (item `q` is `f(q)`; [`EDT_INFINITY`] = no parabola)
+    /// and returns how many parabolas it holds.
+    fn build(&mut self, values: impl Iterator<Item = u32>) -> usize {
+        let mut count = 0usize;
+        let mut top = Top {
+            p: 0,
+            h: 0,
+            num: 0,
+            den: 1,
+        };
+        for (q, fq) in values.enumerate() {
+            if fq == EDT_INFINITY {
+                continue;
+            }
+            let qi = q as i64;
+            let hq = i64::from(fq) + qi * qi;
+            // The new parabola meets the top one at num / den; the top one is popped when
+            // that is no later than where it took over itself (it is then never the lowest).
+            let (mut num, mut den) = (0i64, 1i64);
+            while count > 0 {
+                num = hq - top.h;
+                den = 2 * (qi - top.p);
+                if count > 1 && num * top.den <= top.num * den {
+                    count -= 1;
+                    if count > 1 {
+                        top = self.top(count - 1);
+                    } else {
+                        top.p = self.site(0);
+                        top.h = self.height(0) + top.p * top.p;
+                    }
+                } else {
+                    break;
+                }
+            }
+            self.set(count, q as u32, fq, num);
+            top = Top {
+                p: qi,
+                h: hq,
+                num,
+                den,
+            };
+            count += 1;
+        }
+        count
+    }
+
+    /// Writes the envelope's value at `q = 0, 1, …` to `out` ([`EDT_INFINITY`] everywhere
+    /// when it is empty).
+    fn write<'o>(&mut self, count: usize, out: impl Iterator<Item = &'o mut u32>) {
+        let Some(last) = count.checked_sub(1) else {
+            for o in out {
+                *o = EDT_INFINITY;
+            }
+            return;
+        };
+        // A sentinel breakpoint after the last parabola that no q reaches.
+        let after = self.sites.get(last).copied().unwrap_or(0).saturating_add(1);
+        self.set(count, after, 0, i64::MAX);
+        let mut k = 0usize;
+        let mut p = self.site(0);
+        let mut f = self.height(0);
+        let mut next_num = self.bounds.get(1).copied().unwrap_or(i64::MAX);
+        let mut next_den = 2 * (self.site(1) - p);
+        for (q, o) in out.enumerate() {
+            let qi = q as i64;
+            // Move on while the next parabola takes over strictly before q.
+            while next_num < qi * next_den {
                 k += 1;
-                p = next;
-                fp = height(p) - p * p;
-            } else {
-                break;
+                p = self.site(k);
+                f = self.height(k);
+                next_num = self.bounds.get(k + 1).copied().unwrap_or(i64::MAX);
+                next_den = 2 * (self.site(k + 1) - p);
             }
+            let d = qi - p;
+            *o = u32::try_from(f + d * d).unwrap_or(EDT_INFINITY);
         }
-        let d = q - p;
-        *o = u32::try_from(fp + d * d).unwrap_or(EDT_INFINITY);
     }
 }
 
@@ -284,7 +427,7 @@ mod tests {
             EdtScratch {
                 sites: &mut a,
                 bounds: &mut b,
-                line: &mut c,
+                heights: &mut c,
             },
         )
         .unwrap();
@@ -361,7 +504,7 @@ mod tests {
                 EdtScratch {
                     sites: &mut a,
                     bounds: &mut b,
-                    line: &mut c
+                    heights: &mut c
                 }
             ),
             Err(EdtError::GridSizeMismatch)
@@ -374,7 +517,7 @@ mod tests {
                 EdtScratch {
                     sites: &mut a,
                     bounds: &mut b,
-                    line: &mut c
+                    heights: &mut c
                 }
             ),
             Err(EdtError::ScratchTooSmall)

@@ -4,9 +4,7 @@
 
 use crate::carmen::{CarmenLog, LogError, ReadOptions};
 use crate::map::{Occupancy, OccupancyMap};
-use crate::mapping::{
-    build_from_log, Cell, GridGeometry, MappingError, MappingOptions, OccupancyGrid, OccupiedCells,
-};
+use crate::mapping::{build_from_log, GridGeometry, MappingError, MappingOptions, OccupiedCells};
 use beamfield::em::{fit_slices, EmConfig, EmError, EmFit, ShapeUpdate, StopReason};
 use beamfield::field::{BlobError, FieldView};
 use beamfield::{
@@ -41,27 +39,6 @@ impl OccupiedCells for OccupancyMap {
     }
 }
 
-/// The trinary grid of the mapping code as a loaded map (same cells, same geometry).
-pub fn grid_to_map(grid: &OccupancyGrid) -> OccupancyMap {
-    let g = grid.geometry();
-    OccupancyMap {
-        width: g.width as u32,
-        height: g.height as u32,
-        resolution_m: g.resolution_m,
-        origin_x_m: g.origin_x_m,
-        origin_y_m: g.origin_y_m,
-        cells: grid
-            .cells()
-            .iter()
-            .map(|c| match c {
-                Cell::Occupied => Occupancy::Occupied,
-                Cell::Free => Occupancy::Free,
-                Cell::Unknown => Occupancy::Unknown,
-            })
-            .collect(),
-    }
-}
-
 /// A map built from a log's own poses (the defaults of [`MappingOptions`], 5 cm cells,
 /// map_server's thresholds), as `beamfield map from-log` would write it.
 ///
@@ -69,7 +46,9 @@ pub fn grid_to_map(grid: &OccupancyGrid) -> OccupancyMap {
 /// [`MappingError`] from the mapping code.
 pub fn map_from_log(log: &CarmenLog, max_range_m: f32) -> Result<OccupancyMap, MappingError> {
     let (lo, _) = build_from_log(log, &MappingOptions::new(max_range_m), |_, _| {})?;
-    Ok(grid_to_map(&lo.to_occupancy(OCCUPIED_THRESH, FREE_THRESH)))
+    Ok(OccupancyMap::from_grid(
+        &lo.to_occupancy(OCCUPIED_THRESH, FREE_THRESH),
+    ))
 }
 
 /// `--lambda`: which σ/λ M-step.

@@ -115,7 +115,7 @@ pub fn squared_distances(map: &OccupancyMap) -> Result<Vec<u32>, FieldCmdError> 
         })
         .collect();
     let n = edt_scratch_len(w, h);
-    let (mut sites, mut bounds, mut line) = (vec![0u32; n], vec![0i64; n], vec![0u32; n]);
+    let (mut sites, mut bounds, mut heights) = (vec![0u32; n], vec![0i64; n], vec![0u32; n]);
     squared_edt(
         &mut grid,
         w,
@@ -123,7 +123,7 @@ pub fn squared_distances(map: &OccupancyMap) -> Result<Vec<u32>, FieldCmdError> 
         EdtScratch {
             sites: &mut sites,
             bounds: &mut bounds,
-            line: &mut line,
+            heights: &mut heights,
         },
     )
     .map_err(FieldCmdError::Edt)?;

@@ -44,6 +44,29 @@ pub struct OccupancyMap {
 }
 
 impl OccupancyMap {
+    /// A mapping grid (`beamfield map from-log`'s trinary cells) as a loaded map: same cells,
+    /// same geometry. The blob builder's input.
+    pub fn from_grid(grid: &crate::mapping::OccupancyGrid) -> Self {
+        use crate::mapping::Cell;
+        let g = grid.geometry();
+        Self {
+            width: g.width as u32,
+            height: g.height as u32,
+            resolution_m: g.resolution_m,
+            origin_x_m: g.origin_x_m,
+            origin_y_m: g.origin_y_m,
+            cells: grid
+                .cells()
+                .iter()
+                .map(|c| match c {
+                    Cell::Occupied => Occupancy::Occupied,
+                    Cell::Free => Occupancy::Free,
+                    Cell::Unknown => Occupancy::Unknown,
+                })
+                .collect(),
+        }
+    }
+
     /// The cell at column `ix`, row `iy` (row 0 = lowest y).
     pub fn get(&self, ix: u32, iy: u32) -> Option<Occupancy> {
         if ix >= self.width || iy >= self.height {

@@ -6,8 +6,6 @@
 //! then x: index `(it·ny + iy)·nx + ix`.
 
 use crate::calibrate::GridScores;
-use crate::map::{Occupancy, OccupancyMap};
-use crate::mapping::{Cell, OccupancyGrid};
 use beamfield::{BeamLayout, Pose, Scan, SensorModel};
 
 /// Half-widths and steps of a local pose grid.
@@ -142,27 +140,6 @@ pub fn posterior_sd(g: &GridScores, spec: &GridSpec, kappa: f64) -> (f64, f64, f
     }
     let sd = |k: usize| (m2[k] / total - (m[k] / total).powi(2)).max(0.0).sqrt();
     (sd(0), sd(1), sd(2))
-}
-
-/// A mapping grid as a map_server-style map (the blob builder's input).
-pub fn occupancy_map(grid: &OccupancyGrid) -> OccupancyMap {
-    let g = grid.geometry();
-    OccupancyMap {
-        width: g.width as u32,
-        height: g.height as u32,
-        resolution_m: g.resolution_m,
-        origin_x_m: g.origin_x_m,
-        origin_y_m: g.origin_y_m,
-        cells: grid
-            .cells()
-            .iter()
-            .map(|c| match c {
-                Cell::Occupied => Occupancy::Occupied,
-                Cell::Free => Occupancy::Free,
-                Cell::Unknown => Occupancy::Unknown,
-            })
-            .collect(),
-    }
 }
 
 #[cfg(test)]
