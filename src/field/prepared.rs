@@ -264,8 +264,8 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
     }
 
     /// Whether [`PreparedScan::score`] at `pose` takes the fixed-point path (true for every
-    /// pose within a map's side of the map; false far off it or for NaN), rather than the
-    /// per-beam `f32` path. Both give the same result semantics; this is for tests and
+    /// pose within a map's side of the map, for maps up to 16,000 cells a side; false far off
+    /// it or for NaN), rather than the per-beam `f32` path. Both give the same result semantics; this is for tests and
     /// measurements.
     pub fn uses_fixed_point(&self, pose: &Pose) -> bool {
         let (ax, ay) = self.field.view().to_grid(pose.x_m, pose.y_m);
