@@ -29,7 +29,7 @@ pub use diagnostic::Lag1;
 pub use field::{
     edt_scratch_len, emit_blob, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError,
     EdtScratch, FieldHeader, FieldView, LikelihoodError, LikelihoodField, LikelihoodParam,
-    LikelihoodParams, DEFAULT_MAX_DIST_M, EDT_INFINITY,
+    LikelihoodParams, PreparedScan, DEFAULT_MAX_DIST_M, EDT_INFINITY,
 };
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
 pub use landmark::{

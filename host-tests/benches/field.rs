@@ -5,7 +5,9 @@
 //! (`-- exact_edt ...` for the transform alone). Each transform runs next to a baseline of two
 //! plain passes over the same grid (copy, then sum), so its time is also a ratio to that.
 //! Per-beam figures: criterion's "thrpt" line is in beams per second (elements); ns/beam is its
-//! inverse. The ratio to report is the AMCL-style time over the likelihood-field time.
+//! inverse. The ratio to report is the AMCL-style time over the likelihood-field time, for the
+//! per-pose path (`LikelihoodField::score`) and the prepared one (`PreparedScan::score`, the
+//! scan prepared once per 200 poses, inside the timed region).
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, FieldView, EDT_INFINITY};
 use beamfield::{BeamLayout, LikelihoodField, LikelihoodParams, Pose, Scan, SensorMount};
@@ -122,6 +124,18 @@ fn likelihood(c: &mut Criterion) {
             let mut acc = 0.0f32;
             for p in &poses {
                 acc += lf.score(&layout, &scan, black_box(p)).log_likelihood;
+            }
+            acc
+        })
+    });
+    // The prepared path: the scan is prepared once per iteration (one scan, 200 poses), inside
+    // the timed region, so its cost is included.
+    g.bench_function("likelihood_field_prepared", |b| {
+        b.iter(|| {
+            let prep = lf.prepare(&layout, black_box(&scan));
+            let mut acc = 0.0f32;
+            for p in &poses {
+                acc += prep.score(black_box(p)).log_likelihood;
             }
             acc
         })

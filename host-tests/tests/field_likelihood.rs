@@ -1,4 +1,5 @@
-//! The likelihood field (Table 6.3) against an independent f64 computation, and the best pose
+//! The likelihood field (Table 6.3), per pose and prepared ([`beamfield::PreparedScan`]),
+//! against an independent f64 computation, and the best pose
 //! of a small grid on a synthetic scan ray-cast in the TurtleBot3 map.
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
@@ -142,6 +143,11 @@ fn score_matches_f64_reference() {
         let scan = Scan::<N>::from_ranges(&ranges).unwrap();
         let mut dist = vec![0.0f32; N];
         let got = lf.score_into(&layout, &scan, &pose, &mut dist);
+        // The prepared path (fixed point) on the same scan: the kept beams' distances in order.
+        let prep = lf.prepare(&layout, &scan);
+        let mut prep_dist = Vec::new();
+        let prep_got = prep.score_with(&pose, |_, d| prep_dist.push(d));
+        let mut prep_dist = prep_dist.into_iter();
 
         let mut want = 0.0f64;
         let (mut scored, mut maxr, mut invalid) = (0, 0, 0);
@@ -174,6 +180,11 @@ fn score_matches_f64_reference() {
                 "trial {trial} beam {k}: scored d {} vs reference {d_ref}",
                 dist[k]
             );
+            let d_prep = prep_dist.next().unwrap();
+            assert!(
+                (f64::from(d_prep) - d_ref).abs() < 1e-6,
+                "trial {trial} beam {k}: prepared d {d_prep} vs reference {d_ref}"
+            );
             want += lf_term(
                 d_ref,
                 f64::from(z_hit),
@@ -185,6 +196,22 @@ fn score_matches_f64_reference() {
         assert_eq!(
             (got.scored, got.max_range, got.invalid, got.unpaired),
             (scored, maxr, invalid, 0)
+        );
+        assert_eq!(prep_dist.next(), None);
+        assert_eq!(
+            (
+                prep_got.scored,
+                prep_got.max_range,
+                prep_got.invalid,
+                prep_got.unpaired
+            ),
+            (scored, maxr, invalid, 0)
+        );
+        let prep_diff = (f64::from(prep_got.log_likelihood) - want).abs();
+        assert!(
+            prep_diff <= 2e-6 * want.abs() + 1e-4,
+            "trial {trial}: prepared {} vs {want}",
+            prep_got.log_likelihood
         );
         let diff = (f64::from(got.log_likelihood) - want).abs();
         assert!(

@@ -26,6 +26,13 @@
 //! precomputed unit vector, a projection, one byte read and one table read, with no branch that
 //! depends on the data (the reading's validity is a select) and no panic path.
 //!
+//! To score one scan at many poses (a particle filter's update, a grid search), prepare it
+//! once with [`LikelihoodField::prepare`] and score the [`PreparedScan`](super::PreparedScan):
+//! max-range readings are dropped once, the mount is applied once, and a beam costs a
+//! fixed-point rotation, a byte read and a table read (about 21 instructions on a Cortex-M4F
+//! against about 99 for [`LikelihoodField::score`]; `cargo xtask insns`). Same scores, except
+//! for endpoints within rounding of a cell edge (see [`super::prepared`]).
+//!
 //! # Quantization
 //! `d` is the stored code times `d_max/255` (error ≤ half a step from the cell's exact distance;
 //! the cell itself is the rasterization error of the map). Off the map, the distance to the

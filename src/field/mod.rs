@@ -7,6 +7,8 @@
 //!   together and round-trip. Specified in `docs/blob-format.md`.
 //! - [`view`]: [`FieldView`], a validated zero-copy view of a blob, with infallible lookups.
 //! - [`likelihood`]: [`LikelihoodField`], the likelihood field model scored over a view.
+//! - [`prepared`]: [`PreparedScan`], a scan made ready to be scored at many poses (the fast
+//!   per-beam path).
 //!
 //! The host tool (`beamfield field build`) runs the transform on a map and writes the blob; the
 //! device links the blob and parses it once at boot.
@@ -14,6 +16,7 @@
 pub mod blob;
 pub mod edt;
 pub mod likelihood;
+pub mod prepared;
 pub mod view;
 
 pub use blob::{
@@ -24,4 +27,5 @@ pub use edt::{edt_scratch_len, squared_edt, EdtError, EdtScratch, EDT_INFINITY, 
 pub use likelihood::{
     LikelihoodError, LikelihoodField, LikelihoodParam, LikelihoodParams, LIKELIHOOD_TABLE_LEN,
 };
+pub use prepared::PreparedScan;
 pub use view::FieldView;

@@ -21,18 +21,22 @@ const CROSS_TARGETS: [&str; 4] = [
 ];
 /// Seconds before a QEMU run is killed (a hung program then fails with status 124).
 const QEMU_TIMEOUT_S: &str = "120";
-/// Beams per scan in `firmware/src/bin/insns.rs` (regions 0–3).
+/// Beams per scan of the synthetic regions (0–3) in `firmware/src/bin/insns.rs`.
 const INSNS_BEAMS: u64 = 360;
-/// Beams of region 4: the 8 real Intel scans of 180 beams (`firmware/assets/scans.rs`).
-const INSNS_INTEL_BEAMS: u64 = 8 * 180;
-/// What each measured region of `insns.rs` does, in order, and how many beams it scores.
-const INSNS_REGIONS: [(&str, u64); 5] = [
-    ("empty loop (sum of ranges)", INSNS_BEAMS),
-    ("ln per beam (math::ln)", INSNS_BEAMS),
-    ("exp per beam (math::exp)", INSNS_BEAMS),
-    ("beam mixture, given z*", INSNS_BEAMS),
+/// What each measured region of `insns.rs` does, in order, and what its count is divided by
+/// (the program prints the divisors on its `insns divisors:` line).
+const INSNS_REGIONS: [(&str, &str); 10] = [
+    ("empty loop (sum of ranges)", "beam"),
+    ("ln per beam (math::ln)", "beam"),
+    ("exp per beam (math::exp)", "beam"),
+    ("beam mixture, given z*", "beam"),
+    ("LF prepare, 8 real scans", "beam slot"),
+    ("empty loop, prepared endpoints", "beam"),
+    ("LF prepared score", "beam"),
+    ("LF prepared, no beams (per pose)", "pose"),
+    ("LF per-pose path (score)", "beam"),
     // Issue 4's race: real scans, real map, z* cast on the device.
-    ("beam model + ray cast, Intel", INSNS_INTEL_BEAMS),
+    ("beam model + ray cast, Intel", "beam"),
 ];
 
 type Result<T = ()> = std::result::Result<T, String>;
@@ -67,7 +71,8 @@ enum Task {
         #[arg(long)]
         debug: bool,
     },
-    /// Count guest instructions per beam of the beam mixture, with baselines, under QEMU.
+    /// Count guest instructions per beam of the beam mixture and of the likelihood field
+    /// (prepared and per-pose paths, real map and scans), with baselines, under QEMU.
     ///
     /// Builds firmware/src/bin/insns.rs (release) and runs it with the counting plugin of
     /// ../shared/tools/qemu-insncount/ (needs gcc, and llvm-nm from `rustup component add
@@ -442,18 +447,47 @@ fn insns(machine: &str) -> Result {
             counts.len()
         ));
     }
+    let divisors: Vec<u64> = out
+        .lines()
+        .find_map(|l| l.strip_prefix("insns divisors: "))
+        .ok_or("the program printed no `insns divisors:` line")?
+        .split_whitespace()
+        .map(|d| d.parse::<u64>().map_err(|e| format!("divisor {d}: {e}")))
+        .collect::<Result<_>>()?;
+    if divisors.len() != INSNS_REGIONS.len() || divisors.contains(&0) {
+        return Err(format!("bad divisors {divisors:?}"));
+    }
     let per_beam = |n: u64| n as f64 / INSNS_BEAMS as f64;
-    println!("\ninstructions on {machine} ({FIRMWARE_TARGET}, release):");
     println!(
-        "{:<3} {:<30} {:>6} {:>12} {:>10}",
-        "#", "region", "beams", "total", "per beam"
+        "\ninstructions on {machine} ({FIRMWARE_TARGET}, release); regions 0-3: {INSNS_BEAMS} synthetic beams; 4-9: Intel map and real scans:"
     );
-    for (i, ((name, beams), n)) in INSNS_REGIONS.iter().zip(&counts).enumerate() {
+    println!(
+        "{:<3} {:<34} {:>12} {:>10} {:>10} per",
+        "#", "region", "total", "divisor", "ratio"
+    );
+    for (i, ((name, per), (n, d))) in INSNS_REGIONS
+        .iter()
+        .zip(counts.iter().zip(&divisors))
+        .enumerate()
+    {
         println!(
-            "{i:<3} {name:<30} {beams:>6} {n:>12} {:>10.1}",
-            *n as f64 / *beams as f64
+            "{i:<3} {name:<34} {n:>12} {d:>10} {:>10.1} {per}",
+            *n as f64 / *d as f64
         );
     }
+    let per = |i: usize| counts[i] as f64 / divisors[i] as f64;
+    let pose_work = counts[7] as f64 / divisors[7] as f64;
+    let beams_per_pose = divisors[6] as f64 / divisors[7] as f64;
+    println!(
+        "likelihood field, prepared: {:.1} instructions per beam ({:.1} with the per-pose work of {:.0} spread over {:.1} beams); per-pose path: {:.1} per beam ({:.1}x); empty loop over the endpoints: {:.1}",
+        (counts[6] as f64 - counts[7] as f64) / divisors[6] as f64,
+        per(6),
+        pose_work,
+        beams_per_pose,
+        per(8),
+        counts[8] as f64 / counts[6] as f64,
+        per(5)
+    );
     let (empty, ln, mixture) = (counts[0], counts[1], counts[3]);
     println!(
         "beam mixture: {:.1} instructions per beam ({:.1} above the empty loop; {:.2}x one ln per beam)",
@@ -461,10 +495,9 @@ fn insns(machine: &str) -> Result {
         per_beam(mixture.saturating_sub(empty)),
         mixture as f64 / ln as f64
     );
-    let race = counts[4];
     println!(
         "beam model with on-device ray casting (real Intel map and scans): {:.1} instructions per beam (the mixture alone, given z*, on the synthetic scan: {:.1})",
-        race as f64 / INSNS_INTEL_BEAMS as f64,
+        per(9),
         per_beam(mixture)
     );
     Ok(())

@@ -6,15 +6,30 @@
 //! 0. empty loop: sum the ranges, +∞ read as the max range (the loop and load cost alone);
 //! 1. `beamfield::math::ln` of each range (the host bench's baseline);
 //! 2. `beamfield::math::exp` of each range;
-//! 3. `BeamModel::scan_log_likelihood`: the beam mixture, AMCL default intrinsics, 30 m lidar;
-//! 4. `BeamFieldModel` (issue 4's race): the beam model *with* ray casting through the real Intel
-//!    map blob (`firmware/assets/intel.bin`), scoring the 8 real scans of `firmware/assets/scans.rs`
-//!    (180 beams each, 1,440 beams) at their logged poses, with the intrinsics EM fitted on that
-//!    log. Self-contained: its data and constants live in the module [`intel`].
+//! 3. `BeamModel::scan_log_likelihood`: the beam mixture, AMCL default intrinsics, 30 m lidar.
+//!
+//! Then the likelihood field over the Intel map blob the demo links (`assets/intel.bin`) and
+//! the demo's 8 real 180-beam scans (`assets/scans.rs`), each at `POSES_PER_SCAN` poses
+//! scattered around its logged pose (±25 cm, ±10°):
+//! 4. `LikelihoodField::prepare` of the 8 scans (divided by beam slots);
+//! 5. empty loop over the prepared endpoints at every pose (the loop and load cost alone);
+//! 6. `PreparedScan::score` at every pose (per kept beam, per-pose work included);
+//! 7. `PreparedScan::score` of a scan with no kept beam (all max-range) at the same poses:
+//!    the per-pose work alone, so `(6 − 7) / beams` is the per-beam cost;
+//! 8. `LikelihoodField::score` (the per-pose path) at the same poses, per kept beam;
+//! 9. `BeamFieldModel` (issue 4's race): the beam model *with* ray casting through the same
+//!    blob, scoring the 8 real scans (1,440 beams) at their logged poses, with the intrinsics EM
+//!    fitted on that log (constants in the module [`intel`]).
+//!
+//! The last line printed gives each region's divisor (`insns divisors: …`), which
+//! `cargo xtask insns` reads.
 #![no_std]
 #![no_main]
 
-use beamfield::{math, BeamIntrinsics, BeamModel, Scan};
+use beamfield::{
+    math, BeamIntrinsics, BeamLayout, BeamModel, FieldView, LikelihoodField, LikelihoodParams,
+    Pose, PreparedScan, Scan, SensorMount,
+};
 use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println, Fixed};
 use core::hint::black_box;
 use cortex_m_rt::entry;
@@ -24,6 +39,29 @@ use panic_semihosting as _;
 pub const BEAMS: usize = 360;
 /// The sensor's maximum range, metres.
 const MAX_RANGE_M: f32 = 30.0;
+
+/// The demo's real scans (their own 180-beam type, as the demo declares it).
+mod real {
+    /// Beams per FLASER scan of the Intel log.
+    pub const BEAMS: usize = 180;
+    /// One real scan of the log with its logged laser pose.
+    pub struct DemoScan {
+        /// Index of the FLASER line in the log.
+        pub log_index: u32,
+        /// Logged laser pose `[x_m, y_m, theta_rad]`.
+        pub pose: [f32; 3],
+        /// The ranges, metres.
+        pub ranges_m: [f32; BEAMS],
+    }
+    include!("../../assets/scans.rs");
+}
+
+/// The 5 cm distance field of the Intel map, as the demo links it.
+static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
+/// Poses per real scan in regions 4–8.
+const POSES_PER_SCAN: usize = 32;
+/// Real scans in regions 4–8.
+const REAL_SCANS: usize = 8;
 
 /// xorshift32: a deterministic stand-in for a sensor.
 struct Rng(u32);
@@ -55,23 +93,9 @@ fn synthetic(rng: &mut Rng, ranges: &mut [f32; BEAMS], z_star: &mut [f32; BEAMS]
     }
 }
 
-/// Region 4's data: the demo's real scans and map blob, and the beam model fitted on that log.
+/// Region 9's beam model: the intrinsics fitted on the Intel log (the scans and the blob are
+/// the ones of [`real`] and [`BLOB`]).
 mod intel {
-    /// Beams per FLASER scan of the Intel log.
-    pub const BEAMS: usize = 180;
-    /// One real scan of the log with its logged laser pose (the shape `scans.rs` fills).
-    pub struct DemoScan {
-        /// Index of the FLASER line in the log.
-        #[allow(dead_code)]
-        pub log_index: u32,
-        /// Logged laser pose `[x_m, y_m, theta_rad]`.
-        pub pose: [f32; 3],
-        /// The ranges, metres.
-        pub ranges_m: [f32; BEAMS],
-    }
-    include!("../../assets/scans.rs");
-    /// The 5 cm distance field of the Intel map, as the demo links it.
-    pub static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
     /// `[z_hit, z_short, z_max, z_rand]`, σ_hit (m), λ_short (1/m): `beamfield fit` on the log
     /// (docs/beam-on-device.md, truncated update).
     pub const WEIGHTS: [f32; 4] = [0.878328, 0.057550, 0.023807, 0.040316];
@@ -81,16 +105,16 @@ mod intel {
     pub const LAMBDA_SHORT: f32 = 0.070119;
 }
 
-/// Region 4: scores every embedded real scan at its logged pose with the beam model and
+/// Region 9: scores every embedded real scan at its logged pose with the beam model and
 /// on-device ray casting, between the markers. Returns the summed log-likelihood and the beams
 /// scored, or `None` if the blob, intrinsics or a scan were rejected (reported by the caller).
-/// Not inlined, so adding it leaves the code of `main`'s regions 0–3 as it was.
+/// Not inlined, to keep its code apart from `main`'s regions.
 #[inline(never)]
 fn beam_model_with_ray_casting() -> Option<(f32, usize)> {
     use beamfield::{
         BeamFieldModel, BeamLayout, FieldView, Pose, RayCaster, SensorModel, SensorMount,
     };
-    let caster = RayCaster::new(FieldView::parse(intel::BLOB).ok()?).ok()?;
+    let caster = RayCaster::new(FieldView::parse(BLOB).ok()?).ok()?;
     let s: f32 = intel::WEIGHTS.iter().sum();
     let w = intel::WEIGHTS.map(|x| x / s);
     let intr = BeamIntrinsics::new(
@@ -100,22 +124,22 @@ fn beam_model_with_ray_casting() -> Option<(f32, usize)> {
         w[3],
         intel::SIGMA_HIT_M,
         intel::LAMBDA_SHORT,
-        intel::MAX_RANGE_M,
+        real::MAX_RANGE_M,
     )
     .ok()?;
     let model = BeamFieldModel::new(BeamModel::new(intr), caster);
     // CARMEN FLASER: beam i at −90° + i·1°; the logged poses are the laser's (no mount).
-    let layout = BeamLayout::<{ intel::BEAMS }>::uniform(
+    let layout = BeamLayout::<{ real::BEAMS }>::uniform(
         -core::f32::consts::FRAC_PI_2,
-        core::f32::consts::PI / intel::BEAMS as f32,
-        intel::BEAMS,
-        intel::MAX_RANGE_M,
+        core::f32::consts::PI / real::BEAMS as f32,
+        real::BEAMS,
+        real::MAX_RANGE_M,
         SensorMount::CENTERED,
     )
     .ok()?;
-    let mut scans = [const { None }; intel::SCANS.len()];
-    for (slot, d) in scans.iter_mut().zip(intel::SCANS.iter()) {
-        let scan = Scan::<{ intel::BEAMS }>::from_ranges(&d.ranges_m).ok()?;
+    let mut scans = [const { None }; real::SCANS.len()];
+    for (slot, d) in scans.iter_mut().zip(real::SCANS.iter()) {
+        let scan = Scan::<{ real::BEAMS }>::from_ranges(&d.ranges_m).ok()?;
         *slot = Some((scan, Pose::new(d.pose[0], d.pose[1], d.pose[2])));
     }
     let scans = black_box(&scans);
@@ -178,6 +202,116 @@ fn main() -> ! {
     let score = model.scan_log_likelihood(black_box(&scan), black_box(&z_star[..]));
     bench_mark_end();
 
+    // The likelihood field on the real map and scans.
+    let Ok(view) = FieldView::parse(BLOB) else {
+        println!("insns: map blob rejected");
+        exit(false)
+    };
+    let Ok(params) = LikelihoodParams::new(0.95, 0.05, 0.0588, real::MAX_RANGE_M) else {
+        println!("insns: likelihood parameters rejected");
+        exit(false)
+    };
+    let field = LikelihoodField::new(view, params);
+    let Ok(layout) = BeamLayout::<{ real::BEAMS }>::uniform(
+        -core::f32::consts::FRAC_PI_2,
+        core::f32::consts::PI / real::BEAMS as f32,
+        real::BEAMS,
+        real::MAX_RANGE_M,
+        SensorMount::CENTERED,
+    ) else {
+        println!("insns: layout rejected");
+        exit(false)
+    };
+    let mut scans: [Scan<{ real::BEAMS }>; REAL_SCANS] = Default::default();
+    let mut poses = [[Pose::default(); POSES_PER_SCAN]; REAL_SCANS];
+    for ((demo, scan), ps) in real::SCANS.iter().zip(&mut scans).zip(&mut poses) {
+        let Ok(s) = Scan::from_ranges(&demo.ranges_m) else {
+            println!("insns: scan {} rejected", demo.log_index);
+            exit(false)
+        };
+        *scan = s;
+        for p in ps.iter_mut() {
+            *p = Pose::new(
+                demo.pose[0] + 0.5 * (rng.unit() - 0.5),
+                demo.pose[1] + 0.5 * (rng.unit() - 0.5),
+                demo.pose[2] + 0.35 * (rng.unit() - 0.5),
+            );
+        }
+    }
+    let Ok(no_return) = Scan::<{ real::BEAMS }>::from_ranges(&[f32::INFINITY; real::BEAMS]) else {
+        println!("insns: scan rejected");
+        exit(false)
+    };
+    let empty_prep = field.prepare(&layout, &no_return);
+
+    bench_mark_start();
+    let prepared: [PreparedScan<'_, { real::BEAMS }>; REAL_SCANS] =
+        core::array::from_fn(|i| field.prepare(&layout, black_box(&scans[i % REAL_SCANS])));
+    bench_mark_end();
+    let kept: usize = prepared.iter().map(PreparedScan::len).sum();
+    let evaluations = kept * POSES_PER_SCAN;
+
+    bench_mark_start();
+    let mut acc = 0i32;
+    for (prep, ps) in prepared.iter().zip(&poses) {
+        for p in ps {
+            let _ = black_box(p);
+            for e in prep.endpoints() {
+                acc = acc.wrapping_add(e[0] ^ e[1]);
+            }
+        }
+    }
+    bench_mark_end();
+    let empty_real = black_box(acc);
+
+    bench_mark_start();
+    let mut lf_sum = 0.0f32;
+    for (prep, ps) in prepared.iter().zip(&poses) {
+        for p in ps {
+            lf_sum += prep.score(black_box(p)).log_likelihood;
+        }
+    }
+    bench_mark_end();
+
+    bench_mark_start();
+    let mut overhead_sum = 0.0f32;
+    for ps in &poses {
+        for p in ps {
+            overhead_sum += empty_prep.score(black_box(p)).log_likelihood;
+        }
+    }
+    bench_mark_end();
+
+    bench_mark_start();
+    let mut old_sum = 0.0f32;
+    for (scan, ps) in scans.iter().zip(&poses) {
+        for p in ps {
+            old_sum += field
+                .score(&layout, black_box(scan), black_box(p))
+                .log_likelihood;
+        }
+    }
+    bench_mark_end();
+
+    let fixed_point_poses = prepared
+        .iter()
+        .zip(&poses)
+        .map(|(prep, ps)| ps.iter().filter(|p| prep.uses_fixed_point(p)).count())
+        .sum::<usize>();
+    println!(
+        "insns: likelihood field on the Intel map: {} real scans x {} poses, {} kept beams of {} ({} beam evaluations; {} poses on the fixed-point path); prepared sum {}, per-pose path sum {}, empty-scan sum {}, empty loop {}",
+        REAL_SCANS,
+        POSES_PER_SCAN,
+        kept,
+        REAL_SCANS * real::BEAMS,
+        evaluations,
+        fixed_point_poses,
+        Fixed::new(f64::from(lf_sum), 3),
+        Fixed::new(f64::from(old_sum), 3),
+        Fixed::new(f64::from(overhead_sum), 1),
+        empty_real
+    );
+
     println!(
         "insns: {} beams; regions: 0 empty loop (sum {}), 1 ln per beam (sum {}), 2 exp per beam (sum {}), 3 beam mixture (log-likelihood {}, {} scored, {} invalid)",
         BEAMS,
@@ -188,20 +322,39 @@ fn main() -> ! {
         score.scored,
         score.invalid
     );
-    let mixture_ok = score.log_likelihood.is_finite() && usize::from(score.scored) == BEAMS;
-
-    // Region 4 (issue 4's race): the beam model with ray casting on the real Intel map.
+    // Region 9 (issue 4's race): the beam model with ray casting on the real Intel map.
     let Some((race_ll, race_scored)) = beam_model_with_ray_casting() else {
-        println!("insns: region 4: Intel blob, intrinsics or scans rejected");
+        println!("insns: region 9: Intel blob, intrinsics or scans rejected");
         exit(false)
     };
     println!(
-        "insns: region 4 beam model with ray casting, Intel map: {} scans x {} beams, log-likelihood {}, {} scored",
-        intel::SCANS.len(),
-        intel::BEAMS,
+        "insns: region 9 beam model with ray casting, Intel map: {} scans x {} beams, log-likelihood {}, {} scored",
+        real::SCANS.len(),
+        real::BEAMS,
         Fixed::new(f64::from(race_ll), 3),
         race_scored
     );
-    let race_ok = race_ll.is_finite() && race_scored == intel::SCANS.len() * intel::BEAMS;
-    exit(mixture_ok && race_ok)
+    let race_ok = race_ll.is_finite() && race_scored == real::SCANS.len() * real::BEAMS;
+    // Divisors of each region for `cargo xtask insns`: beams, beam slots, beam evaluations,
+    // poses.
+    println!(
+        "insns divisors: {} {} {} {} {} {} {} {} {} {}",
+        BEAMS,
+        BEAMS,
+        BEAMS,
+        BEAMS,
+        REAL_SCANS * real::BEAMS,
+        evaluations,
+        evaluations,
+        REAL_SCANS * POSES_PER_SCAN,
+        evaluations,
+        real::SCANS.len() * real::BEAMS
+    );
+    exit(
+        score.log_likelihood.is_finite()
+            && usize::from(score.scored) == BEAMS
+            && fixed_point_poses == REAL_SCANS * POSES_PER_SCAN
+            && overhead_sum == 0.0
+            && race_ok,
+    )
 }

@@ -1,0 +1,363 @@
+//! [`PreparedScan`]: one scan made ready to be scored at many poses by a [`LikelihoodField`].
+//!
+//! Most callers score many pose hypotheses against one scan (a particle filter's update, a
+//! grid search). Everything about the scan that does not depend on the pose is done once by
+//! [`LikelihoodField::prepare`]: max-range and invalid readings are dropped (and counted), and
+//! each kept beam's endpoint is stored in the robot frame (the sensor mount's offset and yaw
+//! applied once), in grid cells, as a fixed-point pair:
+//! `(x, y) = (x_s + z·cos(θ_s + β), y_s + z·sin(θ_s + β)) / cell_size`.
+//!
+//! # Cost per beam
+//! Per pose: one `sin_cos` (of the robot's heading; the mount is already applied), the robot's
+//! grid position, and `cos θ`, `sin θ` in fixed point (Q2.30). Per beam: the rotation and
+//! translation as four "multiply, keep the high word, add or subtract" operations
+//! (`c ± ((a·b) >> 32)`, one `smmla`/`smmls` each on a Cortex-M4), two arithmetic shifts to
+//! whole cells (floor, so negative coordinates need no special case), one index multiply-add,
+//! two unsigned compares (column on the map; the slice's own bound, which covers the row), one
+//! byte read, one table read and one `f32` add. `cargo xtask insns` counts it on the target.
+//! On the host, `cargo bench -p host-tests --bench field` times it.
+//! Endpoints off the map take the same out-of-line path as [`LikelihoodField::score`] (the
+//! distance to the map's edge is charged, models.md §3).
+//!
+//! # Numbers
+//! With `F` fractional bits in grid coordinates ([`PreparedScan::frac_bits`], 16 for maps and
+//! ranges under ~8,000 cells), the fixed-point endpoint differs from the exact endpoint of the
+//! same `f32` inputs by less than `4·2^−F` cells plus a few `f32` roundings of the stored
+//! `(x, y)` (`≤ 2^−23·R`, `R` the range in cells). [`LikelihoodField::score`] computes the
+//! endpoint in `f32` with a different rounding order. The two paths therefore read the same
+//! cell, and so add the same table entry, except for endpoints within that distance of a cell
+//! edge (or, off the map, of a code-rounding boundary); when no beam differs the two scores are
+//! bit for bit equal, because terms are added in the same (bearing) order. The host tests
+//! count such beams on real maps and scans (`host-tests/tests/field_prepared.rs`).
+//!
+//! # Memory
+//! 8 bytes per kept beam (two `i32`) plus 36 bytes: 2,916 bytes for 360 beams, 1,476 for 180.
+//!
+//! # Fast-path conditions
+//! The integer path is taken when the robot's grid position is within a range computed at
+//! preparation (the map's size plus the scan's reach, so that no fixed-point sum overflows and
+//! the `u32` cell index cannot wrap back onto the map). A pose outside it (far off the map,
+//! NaN) is scored by a per-beam `f32` path with the same result semantics.
+
+use super::likelihood::LikelihoodField;
+use crate::math;
+use crate::model::Stride;
+use crate::pose::Pose;
+use crate::scan::{BeamLayout, Scan, ScanScore};
+use heapless::Vec;
+
+/// Fractional bits of `cos θ` and `sin θ` in the per-pose fixed-point rotation (Q2.30).
+const TRIG_BITS: i32 = 30;
+/// Most fractional bits of a grid coordinate on the fast path.
+const MAX_FRAC_BITS: u32 = 16;
+
+/// A scan prepared for scoring at many poses against the [`LikelihoodField`] that made it.
+///
+/// Built by [`LikelihoodField::prepare`] or [`LikelihoodField::prepare_strided`]; it borrows
+/// the field, so it can only be scored against the geometry (cell size, `z_max`) it was
+/// prepared for. See the module docs for its cost, numbers and memory.
+#[derive(Clone, Debug)]
+pub struct PreparedScan<'f, const N: usize> {
+    field: &'f LikelihoodField<'f>,
+    /// Kept beams' endpoints in the robot frame, cells, with `frac_bits + 2` fractional bits.
+    points: Vec<[i32; 2], N>,
+    /// `F`: fractional bits of grid coordinates on the fast path.
+    frac_bits: u32,
+    /// The fast path is taken when `|ax| < limit_x` and `limit_y_lo < ay < limit_y_hi`
+    /// (robot position, cells).
+    limit_x: f32,
+    limit_y_lo: f32,
+    limit_y_hi: f32,
+    /// Counts as [`ScanScore`] reports them (`log_likelihood` unused).
+    counts: ScanScore,
+}
+
+impl<'a> LikelihoodField<'a> {
+    /// Prepares `scan` (read against `layout`) for scoring at many poses with
+    /// [`PreparedScan::score`]: drops max-range and invalid readings (counting them) and stores
+    /// each kept beam's endpoint in the robot frame. Costs two passes over the beams and one
+    /// `sin_cos` (of the mount's yaw).
+    pub fn prepare<const N: usize>(
+        &self,
+        layout: &BeamLayout<N>,
+        scan: &Scan<N>,
+    ) -> PreparedScan<'_, N> {
+        self.prepare_strided(layout, scan, Stride::ONE)
+    }
+
+    /// As [`LikelihoodField::prepare`], keeping beams `0, s, 2s, …` only (`s = stride`), like
+    /// [`LikelihoodField::score_strided_with`]: beams left out are neither scored nor counted;
+    /// `unpaired` still counts every reading past the layout's end.
+    pub fn prepare_strided<const N: usize>(
+        &self,
+        layout: &BeamLayout<N>,
+        scan: &Scan<N>,
+        stride: Stride,
+    ) -> PreparedScan<'_, N> {
+        let view = self.view();
+        let inv = view.inv_cell_size();
+        let max_r = self.params().max_range_m();
+        let ranges = scan.ranges_m();
+        let kept = || {
+            layout
+                .beams()
+                .iter()
+                .zip(ranges)
+                .step_by(stride.get())
+                .filter(move |&(_, &r)| (r >= 0.0) & (r < max_r))
+        };
+        let mount = layout.mount();
+        let (sin_m, cos_m) = math::sin_cos(mount.yaw_rad);
+        // The scan's reach in cells: every kept endpoint is within it of the robot.
+        let mut reach = 0.0f32;
+        for (_, &r) in kept() {
+            reach = reach.max(r * inv);
+        }
+        let offset = math::sqrt(mount.x_m * mount.x_m + mount.y_m * mount.y_m) * inv;
+        let reach = f64::from(reach) + f64::from(offset) + 1.0;
+        let side = f64::from(view.width().max(view.height()));
+        // F: the most fractional bits such that a robot anywhere within a map's side of the
+        // map, plus twice the reach, stays inside ±2^(30−F) (no i32 overflow, with margin).
+        let mut frac_bits = MAX_FRAC_BITS;
+        while frac_bits > 0 && side + 2.0 * reach + 4.0 >= pow2(30 - frac_bits as i32) {
+            frac_bits -= 1;
+        }
+        let scale = pow2(frac_bits as i32 + 2) as f32;
+        let mut points = Vec::new();
+        for (beam, &r) in kept() {
+            // Saturating conversion: only an endpoint beyond 2^29 cells could saturate, and
+            // then only at F = 0 (see the module docs); it is clamped, not wrapped.
+            let ux = cos_m * beam.cos - sin_m * beam.sin;
+            let uy = sin_m * beam.cos + cos_m * beam.sin;
+            let x = round_to_i32((mount.x_m + r * ux) * inv * scale);
+            let y = round_to_i32((mount.y_m + r * uy) * inv * scale);
+            // `points` has the layout's capacity and at most one entry per beam.
+            let _ = points.push([x, y]);
+        }
+        // Overflow bound of the fixed-point sums, and the bounds under which the u32 cell
+        // index cannot wrap around onto the map (module docs).
+        let fixed_limit = pow2(31 - frac_bits as i32) - 2.0 * reach - 4.0;
+        let w = f64::from(view.width());
+        let len = view.codes().len() as f64;
+        let below = math::floor_f64((4_294_967_296.0 - len) / w) - reach - 4.0;
+        let above = math::floor_f64(4_294_967_296.0 / w) - reach - 4.0;
+        let stepped = layout
+            .beams()
+            .iter()
+            .zip(ranges)
+            .step_by(stride.get())
+            .map(|(_, &r)| r);
+        // As `score_strided_with` counts: NaN is neither valid nor max-range, hence invalid.
+        let (mut scored, mut max_range, mut paired) = (0u32, 0u32, 0u32);
+        for r in stepped {
+            scored += u32::from((r >= 0.0) & (r < max_r));
+            max_range += u32::from(r >= max_r);
+            paired += 1;
+        }
+        let invalid = paired - scored - max_range;
+        PreparedScan {
+            field: self,
+            points,
+            frac_bits,
+            limit_x: fixed_limit as f32,
+            limit_y_lo: -(below.min(fixed_limit)) as f32,
+            limit_y_hi: above.min(fixed_limit) as f32,
+            counts: ScanScore {
+                log_likelihood: 0.0,
+                scored: sat16(scored),
+                max_range: sat16(max_range),
+                invalid: sat16(invalid),
+                unpaired: sat16(ranges.len().saturating_sub(layout.len())),
+            },
+        }
+    }
+}
+
+impl<'f, const N: usize> PreparedScan<'f, N> {
+    /// Log-likelihood of the prepared scan with the robot at `pose`: the same report as
+    /// [`LikelihoodField::score`] of the scan it was prepared from (see the module docs for
+    /// how the two can differ).
+    pub fn score(&self, pose: &Pose) -> ScanScore {
+        self.score_with(pose, |_, _| {})
+    }
+
+    /// As [`PreparedScan::score`], calling `each(j, distance_m)` for the `j`-th kept beam (in
+    /// bearing order; max-range and invalid readings were dropped, so `j` counts kept beams
+    /// only) with the quantized endpoint distance (metres) that was scored.
+    pub fn score_with<F: FnMut(usize, f32)>(&self, pose: &Pose, mut each: F) -> ScanScore {
+        let view = self.field.view();
+        let table = self.field.table();
+        let step = view.step_m();
+        let (sin_t, cos_t) = math::sin_cos(pose.theta_rad);
+        let (ax, ay) = view.to_grid(pose.x_m, pose.y_m);
+        let mut sum = 0.0f32;
+        if self.fixed_point_at(ax, ay) {
+            let trig = pow2(TRIG_BITS) as f32;
+            let (c, s) = (round_to_i32(cos_t * trig), round_to_i32(sin_t * trig));
+            let f = self.frac_bits;
+            // The usual case with a constant shift (frees a register in the loop); the same
+            // code otherwise.
+            sum = if f == MAX_FRAC_BITS {
+                self.fixed_loop(ax, ay, c, s, MAX_FRAC_BITS, &mut each)
+            } else {
+                self.fixed_loop(ax, ay, c, s, f, &mut each)
+            };
+        } else {
+            let inv_scale = pow2(-(self.frac_bits as i32) - 2) as f32;
+            for (j, p) in self.points.iter().enumerate() {
+                let (x, y) = (p[0] as f32 * inv_scale, p[1] as f32 * inv_scale);
+                let gx = ax + (cos_t * x - sin_t * y);
+                let gy = ay + (sin_t * x + cos_t * y);
+                let code = view.table_index(gx, gy);
+                sum += table.get(usize::from(code)).copied().unwrap_or(0.0);
+                each(j, f32::from(code) * step);
+            }
+        }
+        ScanScore {
+            log_likelihood: sum,
+            ..self.counts
+        }
+    }
+
+    /// The per-beam loop of the fixed-point path: `(ax, ay)` the robot's grid position,
+    /// `(c, s)` its heading's cosine and sine in Q2.30, `f` the fractional bits.
+    #[inline(always)]
+    fn fixed_loop<F: FnMut(usize, f32)>(
+        &self,
+        ax: f32,
+        ay: f32,
+        c: i32,
+        s: i32,
+        f: u32,
+        each: &mut F,
+    ) -> f32 {
+        let view = self.field.view();
+        let table = self.field.table();
+        let step = view.step_m();
+        let scale = pow2(f as i32) as f32;
+        let (axq, ayq) = (round_to_i32(ax * scale), round_to_i32(ay * scale));
+        let w = view.width();
+        let codes = view.codes();
+        let mut sum = 0.0f32;
+        for (j, p) in self.points.iter().enumerate() {
+            let (x, y) = (p[0], p[1]);
+            // Grid coordinates with f fractional bits; the limits keep these sums in range.
+            let gx = mul_hi_sub(mul_hi_add(axq, c, x), s, y);
+            let gy = mul_hi_add(mul_hi_add(ayq, s, x), c, y);
+            // Arithmetic shift: floor, so a point just left of or below the map gets −1.
+            let ix = gx.wrapping_shr(f) as u32;
+            let iy = gy.wrapping_shr(f) as u32;
+            // Row-major index in u32 arithmetic: rows off the map (either side) land past the
+            // payload's end, as the y limits guarantee; columns are checked here.
+            let i = iy.wrapping_mul(w).wrapping_add(ix) as usize;
+            let (term, code) = match codes.get(i) {
+                // A code is ≤ 255 and the table has 256 entries: the check folds away.
+                Some(&code) if ix < w => {
+                    (table.get(usize::from(code)).copied().unwrap_or(0.0), code)
+                }
+                _ => off_map(self.field, gx, gy, f),
+            };
+            sum += term;
+            each(j, f32::from(code) * step);
+        }
+        sum
+    }
+
+    /// Whether [`PreparedScan::score`] at `pose` takes the fixed-point path (true for every
+    /// pose within a map's side of the map, for maps up to 16,000 cells a side; false far off
+    /// it or for NaN), rather than the per-beam `f32` path. Both give the same result semantics; this is for tests and
+    /// measurements.
+    pub fn uses_fixed_point(&self, pose: &Pose) -> bool {
+        let (ax, ay) = self.field.view().to_grid(pose.x_m, pose.y_m);
+        self.fixed_point_at(ax, ay)
+    }
+
+    /// The fast-path test on the robot's grid position (NaN fails every comparison).
+    #[inline(always)]
+    fn fixed_point_at(&self, ax: f32, ay: f32) -> bool {
+        (ax.abs() < self.limit_x) & (ay > self.limit_y_lo) & (ay < self.limit_y_hi)
+    }
+
+    /// The field this scan was prepared for.
+    pub fn field(&self) -> &'f LikelihoodField<'f> {
+        self.field
+    }
+
+    /// Kept beams (those scored at every pose).
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True when no beam was kept (every reading max-range or invalid).
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// `F`: fractional bits of grid coordinates on the fixed-point path (16 unless the map's
+    /// side plus twice the scan's reach exceeds ~16,000 cells). The fixed-point endpoint is
+    /// within `4·2^−F` cells (plus `f32` roundings of the stored endpoint) of the exact one.
+    pub fn frac_bits(&self) -> u32 {
+        self.frac_bits
+    }
+
+    /// The counts every score of this scan reports (its `log_likelihood` is 0).
+    pub fn counts(&self) -> ScanScore {
+        self.counts
+    }
+
+    /// The kept beams' endpoints in the robot frame, cells, as `(x, y)` with
+    /// `frac_bits() + 2` fractional bits.
+    pub fn endpoints(&self) -> &[[i32; 2]] {
+        &self.points
+    }
+}
+
+/// The term and table index of a fixed-point grid point the fast path found off the map:
+/// converted to `f32` (exact for `|g| < 2^24`, rounded monotonically beyond, so the on-map test
+/// cannot change its answer) and charged as [`LikelihoodField::score`] charges it.
+#[inline(never)]
+#[cold]
+fn off_map(field: &LikelihoodField<'_>, gx: i32, gy: i32, f: u32) -> (f32, u8) {
+    let inv = pow2(-(f as i32)) as f32;
+    let code = field.view().table_index(gx as f32 * inv, gy as f32 * inv);
+    let term = field.table().get(usize::from(code)).copied().unwrap_or(0.0);
+    (term, code)
+}
+
+/// `acc + floor(a·b / 2^32)`: the high word of the 64-bit product, added (`smmla` on a
+/// Cortex-M4).
+#[inline(always)]
+fn mul_hi_add(acc: i32, a: i32, b: i32) -> i32 {
+    acc.wrapping_add(((i64::from(a) * i64::from(b)) >> 32) as i32)
+}
+
+/// `acc − ceil(a·b / 2^32)`, i.e. `floor((acc·2^32 − a·b) / 2^32)`: the 64-bit difference's
+/// high word (`smmls` on a Cortex-M4).
+#[inline(always)]
+fn mul_hi_sub(acc: i32, a: i32, b: i32) -> i32 {
+    (((i64::from(acc) << 32).wrapping_sub(i64::from(a) * i64::from(b))) >> 32) as i32
+}
+
+/// `2^e` for a small `e`, exactly.
+fn pow2(e: i32) -> f64 {
+    let mut v = 1.0f64;
+    if e >= 0 {
+        for _ in 0..e {
+            v *= 2.0;
+        }
+    } else {
+        for _ in 0..e.unsigned_abs() {
+            v *= 0.5;
+        }
+    }
+    v
+}
+
+/// Rounds half away from zero and saturates (NaN gives 0).
+fn round_to_i32(v: f32) -> i32 {
+    (if v >= 0.0 { v + 0.5 } else { v - 0.5 }) as i32
+}
+
+fn sat16<T: TryInto<u16>>(n: T) -> u16 {
+    n.try_into().unwrap_or(u16::MAX)
+}
