@@ -388,6 +388,12 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
             format!("{} B ({l} + {s})", l + s),
         ));
     }
+    if let Some(p) = state("prepared") {
+        rows.push(row(
+            "caller's PreparedScan, 360 beams (8 B per kept beam + header; not in the core)",
+            format!("{p} B"),
+        ));
+    }
     rows.push(hard(
         "heap (allocator symbols in the firmware programs)",
         if with_heap.is_empty() {
@@ -428,6 +434,12 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
             Some(TARGET_LF_PER_BEAM),
         ),
         ("beam", "beam-half", "beam model + ray casting", None),
+        (
+            "lf-prepared",
+            "lf-prepared-half",
+            "likelihood field, prepared scan",
+            Some(TARGET_LF_PER_BEAM),
+        ),
     ] {
         let (Some(f), Some(h)) = (region(full), region(half)) else {
             rows.push(row(format!("{label}: instructions"), "not measured"));

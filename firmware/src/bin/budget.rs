@@ -13,7 +13,9 @@
 //! `lf` and `lf-half` (the likelihood field over every beam and over every second one: their
 //! difference is the marginal cost of a beam), `tempered` (the tempered likelihood field),
 //! `normalize` (normalizing `POSES` log-weights), `beam` and `beam-half` (the beam model with
-//! ray casting).
+//! ray casting), then `lf-prepared` and `lf-prepared-half` (the likelihood field through a
+//! [`PreparedScan`] made once before the region, over its kept beams; the form a pose-scoring
+//! loop uses).
 //!
 //! Stack: `budget: stack <name> <bytes>`, the deepest word written below the caller's stack
 //! pointer by one call (the region is painted with a pattern first, then scanned), and
@@ -23,8 +25,8 @@
 
 use beamfield::{
     normalize_log_weights, BeamFieldModel, BeamIntrinsics, BeamLayout, BeamModel, FieldView,
-    LikelihoodField, LikelihoodParams, Pose, RayCaster, Scan, SensorModel, SensorMount, Stride,
-    Tempered,
+    LikelihoodField, LikelihoodParams, Pose, PreparedScan, RayCaster, Scan, SensorModel,
+    SensorMount, Stride, Tempered,
 };
 use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println};
 use core::hint::black_box;
@@ -154,6 +156,19 @@ fn region<M: SensorModel<BEAMS>>(c: &Ctx<'_>, model: &M, stride: Stride) -> f32 
     sum
 }
 
+/// Sum of a prepared scan's log-likelihoods over the hypotheses, between the markers.
+fn prepared_region(prepared: &PreparedScan<'_, BEAMS>, poses: &[Pose; POSES]) -> f32 {
+    let prepared = black_box(prepared);
+    let poses = black_box(poses);
+    bench_mark_start();
+    let mut sum = 0.0f32;
+    for pose in poses {
+        sum += prepared.score(pose).log_likelihood;
+    }
+    bench_mark_end();
+    sum
+}
+
 #[entry]
 fn main() -> ! {
     let Some(first) = SCANS.first() else {
@@ -225,13 +240,18 @@ fn main() -> ! {
         scored.scored,
         scored.max_range
     );
-    let names: [(&str, usize); 6] = [
+    // Prepared once, outside the measured regions (the per-scan cost, not per pose).
+    let prepared = ctx.field.prepare(&ctx.layout, &ctx.scan);
+    let prepared_half = ctx.field.prepare_strided(&ctx.layout, &ctx.scan, half);
+    let names: [(&str, usize); 8] = [
         ("lf", BEAMS),
         ("lf-half", BEAMS.div_ceil(2)),
         ("tempered", BEAMS),
         ("normalize", 0),
         ("beam", BEAMS),
         ("beam-half", BEAMS.div_ceil(2)),
+        ("lf-prepared", prepared.len()),
+        ("lf-prepared-half", prepared_half.len()),
     ];
     for (i, (name, beams)) in names.iter().enumerate() {
         println!(
@@ -256,9 +276,19 @@ fn main() -> ! {
     bench_mark_end();
     let beam = region(&ctx, &ctx.beam, Stride::ONE);
     let beam_half = region(&ctx, &ctx.beam, half);
-    let ok_counts = [lf, lf_half, tempered, beam, beam_half]
-        .iter()
-        .all(|v| v.is_finite())
+    let lf_prepared = prepared_region(&prepared, &ctx.poses);
+    let lf_prepared_half = prepared_region(&prepared_half, &ctx.poses);
+    let ok_counts = [
+        lf,
+        lf_half,
+        tempered,
+        beam,
+        beam_half,
+        lf_prepared,
+        lf_prepared_half,
+    ]
+    .iter()
+    .all(|v| v.is_finite())
         && norm.is_ok();
 
     ctx.weights = weights;
@@ -298,6 +328,10 @@ fn main() -> ! {
         core::mem::size_of::<BeamLayout<BEAMS>>()
     );
     println!("budget: state scan {}", core::mem::size_of::<Scan<BEAMS>>());
+    println!(
+        "budget: state prepared {}",
+        core::mem::size_of::<PreparedScan<'_, BEAMS>>()
+    );
     println!(
         "budget: state weights {}",
         core::mem::size_of::<[f32; POSES]>()
