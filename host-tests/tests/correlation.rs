@@ -11,15 +11,7 @@ use beamfield_tools::field_cmd::build_blob;
 use beamfield_tools::map::{Occupancy, OccupancyMap};
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use host_tests::xorshift::XorShift64 as Rng;
 
 /// ρ by its definition (models.md §4), in f64, with m̄ the mean over both maps.
 fn rho_f64(m: &[f64], l: &[f64]) -> f64 {

@@ -23,15 +23,7 @@ fn turtlebot3() -> (Vec<u8>, Grid) {
     (blob, g)
 }
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use host_tests::xorshift::XorShift64 as Rng;
 
 /// f64 endpoint of beam k (grid units), as models.md §3 writes it.
 fn endpoint(

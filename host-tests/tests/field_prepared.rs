@@ -31,15 +31,7 @@ use beamfield_tools::map::load_map;
 
 const N: usize = 180;
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use host_tests::xorshift::XorShift64 as Rng;
 
 fn blob_of(rel: &str) -> Vec<u8> {
     build_blob(&load_map(&host_tests::data_dir().join(rel)).unwrap(), 2.0).unwrap()

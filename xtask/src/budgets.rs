@@ -5,7 +5,7 @@
 
 use super::{
     build_firmware, capture, cargo, ensure_llvm_nm, ensure_qemu, ensure_target, insncount_dir,
-    repo_root, run_to_files, scratch, show, Result, FIRMWARE_TARGET,
+    repo_root, run_counted, show, Result, FIRMWARE_TARGET,
 };
 use std::collections::BTreeMap;
 use std::fs;
@@ -192,18 +192,7 @@ fn parse_run(out: &str, err: &str) -> Result<Run> {
 /// Runs `budget` under the counting plugin (as `cargo xtask insns` does).
 fn run_budget(elf: &Path, machine: &str) -> Result<Run> {
     let tools = insncount_dir()?;
-    let plugin_dir = scratch()?.with_extension("plugin");
-    fs::create_dir_all(&plugin_dir).map_err(|e| format!("{}: {e}", plugin_dir.display()))?;
-    let result = run_to_files(
-        Command::new("bash")
-            .arg(tools.join("count-insns.sh"))
-            .arg(elf)
-            .arg(machine)
-            .env("TMPDIR", &plugin_dir),
-        "budget",
-    );
-    let _ = fs::remove_dir_all(&plugin_dir);
-    let (code, out, err) = result?;
+    let (code, out, err) = run_counted(&tools, elf, machine, "budget")?;
     if code != 0 {
         eprint!("{out}{err}");
         return Err(format!("the budget program exited {code} under QEMU"));

@@ -354,6 +354,30 @@ fn qemu(bin: &str, machine: &str, release: bool) -> Result {
 }
 
 /// The shared instruction-count tools, beside the repository (`../shared/tools/...`).
+/// Runs `elf` on `machine` under the QEMU counting plugin (`count-insns.sh` in `tools`),
+/// capturing its output as `name.stdout`/`name.stderr`: (exit code, stdout, stderr).
+fn run_counted(
+    tools: &Path,
+    elf: &Path,
+    machine: &str,
+    name: &str,
+) -> Result<(i32, String, String)> {
+    // The script caches the compiled plugin in $TMPDIR: give it a private one, so a stale
+    // plugin from elsewhere is never used.
+    let plugin_dir = scratch()?.with_extension("plugin");
+    fs::create_dir_all(&plugin_dir).map_err(|e| format!("{}: {e}", plugin_dir.display()))?;
+    let result = run_to_files(
+        Command::new("bash")
+            .arg(tools.join("count-insns.sh"))
+            .arg(elf)
+            .arg(machine)
+            .env("TMPDIR", &plugin_dir),
+        name,
+    );
+    let _ = fs::remove_dir_all(&plugin_dir);
+    result
+}
+
 fn insncount_dir() -> Result<PathBuf> {
     if let Some(p) = std::env::var_os("BEAMFIELD_INSNCOUNT") {
         return Ok(PathBuf::from(p));
@@ -411,20 +435,7 @@ fn insns(machine: &str) -> Result {
     let elf = elves
         .get("insns")
         .ok_or("the firmware has no `insns` program")?;
-    // The script caches the compiled plugin in $TMPDIR: give it a private one, so a stale
-    // plugin from elsewhere is never used.
-    let plugin_dir = scratch()?.with_extension("plugin");
-    fs::create_dir_all(&plugin_dir).map_err(|e| format!("{}: {e}", plugin_dir.display()))?;
-    let result = run_to_files(
-        Command::new("bash")
-            .arg(tools.join("count-insns.sh"))
-            .arg(elf)
-            .arg(machine)
-            .env("TMPDIR", &plugin_dir),
-        "insns",
-    );
-    let _ = fs::remove_dir_all(&plugin_dir);
-    let (code, out, err) = result?;
+    let (code, out, err) = run_counted(&tools, elf, machine, "insns")?;
     print!("{out}");
     if code != 0 {
         eprint!("{err}");
