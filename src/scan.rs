@@ -151,10 +151,20 @@ impl<const N: usize> BeamLayout<N> {
                 capacity: N,
             });
         }
+        // Bearing i is `first + i·step` with one rounding at the end, not i accumulated ones,
+        // and without f64 (soft-float on a Cortex-M4F: 2 KB of flash). The step is split into
+        // 12-bit halves, so for i < 4,096 both partial products are exact in f32; the three
+        // terms are then added with the first addition's error carried (two-sum).
+        let step_hi = f32::from_bits(step_rad.to_bits() & 0xFFFF_F000);
+        let step_lo = step_rad - step_hi;
         let mut bearings: Vec<f32, N> = Vec::new();
         for i in 0..count {
-            // Computed in f64 so that bearing i does not accumulate i roundings.
-            let b = (f64::from(first_rad) + i as f64 * f64::from(step_rad)) as f32;
+            let fi = i as f32;
+            let (a, c) = (fi * step_hi, fi * step_lo);
+            let s = first_rad + a;
+            let z = s - first_rad;
+            let err = (first_rad - (s - z)) + (a - z);
+            let b = s + (err + c);
             bearings.push(b).map_err(|_| ScanError::TooMany {
                 given: count,
                 capacity: N,
@@ -350,6 +360,44 @@ mod tests {
         assert_eq!(l.len(), 180);
         assert!((l.beams()[90].bearing_rad).abs() < 1e-7);
         assert!((l.beams()[0].cos).abs() < 1e-6 && (l.beams()[0].sin + 1.0).abs() < 1e-6);
+    }
+
+    /// `uniform`'s f32 bearings against `first + i·step` computed in f64, the formula it used
+    /// before (the product is exact in f64; the sum is exact or one f64 rounding away): each must
+    /// be the f32 nearest to it or its neighbour (faithful), and the nearest in nearly every case.
+    #[test]
+    fn uniform_bearings_are_rounded_once() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut total, mut not_nearest) = (0usize, 0usize);
+        for _ in 0..300 {
+            let first = (-3.2 + 6.4 * next()) as f32;
+            let step = (1e-3 + 0.05 * next()) as f32;
+            let l =
+                BeamLayout::<720>::uniform(first, step, 720, 10.0, SensorMount::CENTERED).unwrap();
+            for (i, beam) in l.beams().iter().enumerate() {
+                let exact = f64::from(first) + i as f64 * f64::from(step);
+                let nearest = exact as f32;
+                let got = beam.bearing_rad;
+                total += 1;
+                if got != nearest {
+                    not_nearest += 1;
+                    let ulp =
+                        f64::from(f32::from_bits(nearest.abs().to_bits() + 1) - nearest.abs());
+                    assert!(
+                        (f64::from(got) - exact).abs() < ulp,
+                        "beam {i}: {got} vs {exact}"
+                    );
+                }
+            }
+        }
+        println!("uniform: {not_nearest} of {total} bearings are the other faithful neighbour");
+        assert!(not_nearest * 1000 <= total, "{not_nearest} of {total}");
     }
 
     #[test]

@@ -1,5 +1,7 @@
-// Shared body of `bin/size_core.rs` and `bin/size_skeleton.rs` (included by both, which set
-// `SCORE`). The two programs are the same text: they link the same blob, read the same opaque
+// Shared body of `bin/size_core.rs`, `bin/size_lf.rs` and `bin/size_skeleton.rs` (included by
+// all three, which set `SCORE` and `BEAM_MODEL`). `size_lf` is the likelihood-field core alone
+// (what a user who localizes with the likelihood field flashes); `size_core` adds the beam model
+// with ray casting. The programs are the same text: they link the same blob, read the same opaque
 // inputs, end the same way and have the same (non-formatting) panic handler. Only `size_core`
 // calls the scoring core (`score` below), so the difference of their sections, as
 // `cargo xtask budgets` computes it with `llvm-size -A`, is what the scoring core costs in
@@ -31,9 +33,10 @@ static RANGES_M: [f32; BEAMS] = [2.5; BEAMS];
 static PARAMS: [f32; 8] = [30.0, 0.95, 0.05, 0.0588, 8.25, 9.9, -18.96, 3.13];
 
 /// The scoring core: parses the blob, builds the tempered likelihood field, the beam layout
-/// and the scan, scores `POSES` hypotheses, normalizes their weights, and scores the best one
-/// with the beam model (ray casting through the same blob). Returns a checksum of every result,
-/// or NaN when an input is rejected.
+/// and the scan, scores `POSES` hypotheses (through `score` and through a `PreparedScan`),
+/// normalizes their weights, and, with `BEAM_MODEL`, scores the best one with the beam model
+/// (ray casting through the same blob). Returns a checksum of every result, or NaN when an
+/// input is rejected.
 #[inline(never)]
 fn score(blob: &[u8], ranges_m: &[f32], p: &[f32; 8]) -> f32 {
     let [max_range_m, z_hit, z_rand, sigma_hit_m, kappa, x_m, y_m, theta_rad] = *p;
@@ -43,7 +46,8 @@ fn score(blob: &[u8], ranges_m: &[f32], p: &[f32; 8]) -> f32 {
     let Ok(params) = LikelihoodParams::new(z_hit, z_rand, sigma_hit_m, max_range_m) else {
         return f32::NAN;
     };
-    let Ok(tempered) = Tempered::new(LikelihoodField::new(view, params), kappa, 1) else {
+    let field = LikelihoodField::new(view, params);
+    let Ok(tempered) = Tempered::new(field.clone(), kappa, 1) else {
         return f32::NAN;
     };
     let tau = 2.0 * core::f32::consts::PI;
@@ -65,19 +69,30 @@ fn score(blob: &[u8], ranges_m: &[f32], p: &[f32; 8]) -> f32 {
         let pose = Pose::new(x_m + d, y_m - d, theta_rad + d);
         *w = tempered.score(&layout, &scan, &pose).log_likelihood;
     }
+    let prepared = field.prepare(&layout, &scan);
+    let mut sum = 0.0f32;
+    for (i, w) in weights.iter_mut().enumerate() {
+        let d = 0.005 * i as f32;
+        let pose = Pose::new(x_m - d, y_m + d, theta_rad - d);
+        sum += prepared.score(&pose).log_likelihood;
+        *w += sum;
+    }
     let Ok(norm) = normalize_log_weights(&mut weights) else {
         return f32::NAN;
     };
-    let Ok(intrinsics) = BeamIntrinsics::amcl_defaults(max_range_m) else {
-        return f32::NAN;
-    };
-    let Ok(caster) = RayCaster::new(view) else {
-        return f32::NAN;
-    };
-    let beam = BeamFieldModel::new(BeamModel::new(intrinsics), caster);
-    let d = 0.01 * norm.best as f32;
-    let best = Pose::new(x_m + d, y_m - d, theta_rad + d);
-    let mut sum = norm.ess + norm.log_total + beam.score(&layout, &scan, &best).log_likelihood;
+    sum += norm.ess + norm.log_total;
+    if BEAM_MODEL {
+        let Ok(intrinsics) = BeamIntrinsics::amcl_defaults(max_range_m) else {
+            return f32::NAN;
+        };
+        let Ok(caster) = RayCaster::new(view) else {
+            return f32::NAN;
+        };
+        let beam = BeamFieldModel::new(BeamModel::new(intrinsics), caster);
+        let d = 0.01 * norm.best as f32;
+        let best = Pose::new(x_m + d, y_m - d, theta_rad + d);
+        sum += beam.score(&layout, &scan, &best).log_likelihood;
+    }
     #[cfg(feature = "deliberate-panic")]
     {
         // An index the compiler cannot prove in bounds: a panic path the no-panic link must

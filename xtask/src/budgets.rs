@@ -268,6 +268,7 @@ fn symbols(nm: &Path, elf: &Path) -> Result<BTreeMap<String, u64>> {
         // impls keep `$LT$`-style escapes after demangling.
         let name = name
             .replace("size_core::", "<program>::")
+            .replace("size_lf::", "<program>::")
             .replace("size_skeleton::", "<program>::")
             .replace("$LT$", "<")
             .replace("$GT$", ">")
@@ -290,12 +291,18 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
             .get(n)
             .ok_or_else(|| format!("the firmware has no `{n}` program"))
     };
-    let (core_elf, skel_elf, budget_elf) =
-        (elf("size_core")?, elf("size_skeleton")?, elf("budget")?);
+    let (core_elf, lf_elf, skel_elf, budget_elf) = (
+        elf("size_core")?,
+        elf("size_lf")?,
+        elf("size_skeleton")?,
+        elf("budget")?,
+    );
     let core = sections(&size, core_elf)?;
+    let lf = sections(&size, lf_elf)?;
     let skel = sections(&size, skel_elf)?;
     let diff = |names: &[&str]| gsec(&core, names).saturating_sub(gsec(&skel, names));
     let signed = |names: &[&str]| gsec(&core, names) as i64 - gsec(&skel, names) as i64;
+    let lf_diff = |names: &[&str]| gsec(&lf, names).saturating_sub(gsec(&skel, names));
 
     // Heap: no allocator symbol in any firmware program (they link without a
     // #[global_allocator], which already proves the crate graph never allocates).
@@ -316,20 +323,34 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
     let region = |n: &str| run.regions.iter().find(|r| r.name == n);
 
     let mut rows = Vec::new();
+    let lf_text = lf_diff(&[".text"]);
+    rows.push(check(
+        "likelihood-field core .text (size_lf - size_skeleton)",
+        format!("{lf_text} B"),
+        format!("<= {TARGET_TEXT} B"),
+        lf_text <= TARGET_TEXT,
+    ));
+    rows.push(row(
+        "likelihood-field core .rodata (size_lf - size_skeleton)",
+        format!(
+            "{} B",
+            gsec(&lf, &[".rodata"]) as i64 - gsec(&skel, &[".rodata"]) as i64
+        ),
+    ));
     let text = diff(&[".text"]);
     rows.push(check(
-        "core .text (size_core - size_skeleton)",
+        "full core .text, both models (size_core - size_skeleton)",
         format!("{text} B"),
         format!("<= {TARGET_TEXT} B"),
         text <= TARGET_TEXT,
     ));
     rows.push(row(
-        "core .rodata (size_core - size_skeleton)",
+        "full core .rodata (size_core - size_skeleton)",
         format!("{} B", signed(&[".rodata"])),
     ));
     let static_ram = diff(&[".data", ".bss", ".uninit"]);
     rows.push(row(
-        "core .data + .bss (size_core - size_skeleton)",
+        "full core .data + .bss (size_core - size_skeleton)",
         format!("{static_ram} B"),
     ));
     for (key, what) in [
@@ -476,19 +497,19 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
         ));
     }
 
-    // The largest symbols the core adds (present in size_core, absent from the skeleton).
+    // The largest symbols each core adds (present in it, absent from the skeleton).
     let skel_syms = symbols(&nm, skel_elf)?;
-    let mut added: Vec<(u64, String)> = symbols(&nm, core_elf)?
-        .into_iter()
-        .filter(|(name, _)| !skel_syms.contains_key(name))
-        .map(|(name, bytes)| (bytes, name))
-        .collect();
-    added.sort_by(|a, b| b.cmp(a));
-    println!(
-        "\nbudgets: largest symbols of the scoring core (in size_core, not in size_skeleton):"
-    );
-    for (bytes, name) in added.iter().take(12) {
-        println!("budgets:   {bytes:>6} B  {name}");
+    for (program, elf) in [("size_lf", lf_elf), ("size_core", core_elf)] {
+        let mut added: Vec<(u64, String)> = symbols(&nm, elf)?
+            .into_iter()
+            .filter(|(name, _)| !skel_syms.contains_key(name))
+            .map(|(name, bytes)| (bytes, name))
+            .collect();
+        added.sort_by(|a, b| b.cmp(a));
+        println!("\nbudgets: largest symbols of {program} that size_skeleton does not have:");
+        for (bytes, name) in added.iter().take(12) {
+            println!("budgets:   {bytes:>6} B  {name}");
+        }
     }
 
     println!(

@@ -10,4 +10,7 @@
 /// This program calls the scoring core.
 const SCORE: bool = true;
 
+/// This program links the beam model.
+const BEAM_MODEL: bool = true;
+
 include!("../size_common.rs");
