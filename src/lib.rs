@@ -19,6 +19,8 @@ pub mod raycast;
 pub mod scan;
 pub mod sonar;
 pub mod tempered;
+// With `micromath`, its sin/cos are used instead and this module only runs its tests.
+#[cfg_attr(feature = "micromath", allow(dead_code))]
 mod trig;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
