@@ -419,8 +419,12 @@ where
     let mut proposal_from: Option<Saved<G>> = None;
     let (stop, last) = loop {
         let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
-        let probe = if truncated {
+        let probe = if exact {
             Probe::at(1.0 / (sigma * sigma), lambda)
+        } else if truncated {
+            // The one-step update needs only the derivatives; the fallback re-evaluates the
+            // value if it is ever needed.
+            Probe::derivatives_at(1.0 / (sigma * sigma), lambda)
         } else {
             Probe::default()
         };
@@ -430,20 +434,23 @@ where
         if used == 0 {
             break (StopReason::NoData, st);
         }
-        let mean_ll = st.ll / used as f64;
+        let mean_ll = st.log_likelihood() / used as f64;
         if let Some(prev) = proposal_from.take() {
             if mean_ll < prev.mean_ll {
                 // The one-step Newton proposal lowered the likelihood: take the generalized EM
-                // step from the previous parameters instead (guaranteed not to lower it).
+                // step from the previous parameters instead (guaranteed not to lower it). Its
+                // start needs the shape terms' values at the previous σ, λ, which the one-step
+                // pass did not compute: one more pass at the previous θ (same E-step).
+                let first = run(&prev.theta, &Probe::at(tau_of(prev.sigma), prev.lambda));
                 let (s, l, extra) = newton_shapes(
                     config,
                     &run,
                     &prev.theta,
-                    &prev.stats,
+                    &first,
                     (prev.sigma, prev.lambda),
                     bounds,
                 );
-                passes = passes.saturating_add(extra);
+                passes = passes.saturating_add(extra.saturating_add(1));
                 w = prev.new_weights;
                 sigma = s;
                 lambda = l;
@@ -512,7 +519,6 @@ where
             };
             proposal_from = Some(Saved {
                 theta: th,
-                stats: st,
                 sigma,
                 lambda,
                 new_weights: new_w,
@@ -566,7 +572,6 @@ where
 #[derive(Clone, Copy)]
 struct Saved<const G: usize> {
     theta: Theta<G>,
-    stats: PassStats<G>,
     sigma: f64,
     lambda: f64,
     new_weights: [[f32; 4]; G],

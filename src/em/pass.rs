@@ -23,11 +23,30 @@ const ERF_IS_ONE: f64 = 6.0;
 /// subnormal), so the call is skipped without changing a bit of the result.
 const EXP_IS_ZERO: f64 = -746.0;
 
+/// Range of a reading's density total (1/m) handled by the linear E-step of
+/// [`PassStats::visit`] (`≈ 2⁻⁸⁹⁷` to `2⁸⁹⁷`); outside it, the log-domain E-step.
+const LINEAR_MIN: f64 = 1e-270;
+const LINEAR_MAX: f64 = 1e270;
+
+/// The 52 fraction bits of an f64.
+const MANTISSA_BITS: u64 = (1u64 << 52) - 1;
+/// The bits of 1.0 (biased exponent 1023, fraction 0).
+const ONE_BITS: u64 = 1023u64 << 52;
+
+/// `ln 2` split as `LN2_HI + LN2_LO` (fdlibm's split): `LN2_HI` = 0x3FE62E42FEE00000 has 32
+/// significant bits (its low 21 fraction bits are 0), so `k·LN2_HI` is exact for any integer
+/// `|k| < 2²¹`; beyond that it rounds by half an ulp, like any other term of the sum.
+const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
+const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+
 /// The current parameters with the constants derived from them, f64.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Theta<const G: usize> {
     /// `ln w_c` per group, `[hit, short, max, rand]` (−∞ for a zero weight).
     pub ln_w: [[f64; 4]; G],
+    /// The per-reading constant factor of each component's density per group, for the linear
+    /// E-step: `[w_hit/(σ·√(2π)) (1/m), w_short·λ (1/m), w_max, w_rand/z_max (1/m)]`.
+    pub lin_w: [[f64; 4]; G],
     pub inv_sigma: f64,
     /// `−ln σ − ln √(2π)`.
     pub ln_peak: f64,
@@ -50,8 +69,14 @@ impl<const G: usize> Theta<G> {
         let sigma = f64::from(sigma_m);
         let lambda = f64::from(lambda_per_m);
         let zmax = f64::from(zmax_m);
+        let mut lin_w = [[0.0f64; 4]; G];
+        for (lg, wg) in lin_w.iter_mut().zip(w) {
+            let [wh, ws, wm, wr] = wg.map(f64::from);
+            *lg = [wh * INV_SQRT_2PI_F64 / sigma, ws * lambda, wm, wr / zmax];
+        }
         Self {
             ln_w,
+            lin_w,
             inv_sigma: 1.0 / sigma,
             ln_peak: -math::ln_f64(sigma) - LN_SQRT_2PI_F64,
             lambda,
@@ -69,8 +94,11 @@ impl<const G: usize> Theta<G> {
 pub(crate) struct Probe {
     hit: Option<HitProbe>,
     short: Option<ShortProbe>,
+    /// Whether the value of the short term (`Curve[0]` of [`PassStats::short_curve`]) is wanted.
+    /// Without it the pass skips one `ln` per short-range reading and leaves that entry 0; the
+    /// derivatives are always computed.
+    short_value: bool,
 }
-
 /// Constants of a hit probe at precision `τ = 1/σ²` (1/m²).
 #[derive(Clone, Copy, Debug)]
 struct HitProbe {
@@ -107,12 +135,22 @@ impl Probe {
                 inv_lambda: 1.0 / lambda,
                 inv_lambda2: 1.0 / (lambda * lambda),
             }),
+            short_value: true,
         }
     }
 
     /// A probe at both `τ` and `λ`.
     pub fn at(tau: f64, lambda: f64) -> Self {
         Self::new(Some(tau), Some(lambda))
+    }
+
+    /// A probe at both `τ` and `λ` that needs only the derivatives of the short term, not its
+    /// value (the one-step update of [`super::ShapeUpdate::Truncated`]).
+    pub fn derivatives_at(tau: f64, lambda: f64) -> Self {
+        Self {
+            short_value: false,
+            ..Self::at(tau, lambda)
+        }
     }
 }
 
@@ -126,8 +164,14 @@ pub(crate) struct PassStats<const G: usize> {
     pub n: [u64; G],
     /// `Σ_i e_{i,c}` per group.
     pub e: [[f64; 4]; G],
-    /// `Σ_i ln p(z_i | z*_i, θ_t)`.
-    pub ll: f64,
+    /// `Σ_i ln p(z_i | z*_i, θ_t)` over the readings of the log-domain E-step (see
+    /// [`PassStats::visit`]); the others are in `ll_mant`, `ll_exp`. Read the total with
+    /// [`PassStats::log_likelihood`].
+    ll: f64,
+    /// Mantissa of `Π_i p(z_i | z*_i, θ_t)` over the readings of the linear E-step, in `[1, 2)`.
+    ll_mant: f64,
+    /// Binary exponent of that product: the product is `ll_mant · 2^ll_exp`.
+    ll_exp: i64,
     /// NaN or negative readings.
     pub invalid: u64,
     /// Readings no cause with non-zero weight explains.
@@ -150,6 +194,8 @@ impl<const G: usize> Default for PassStats<G> {
             n: [0; G],
             e: [[0.0; 4]; G],
             ll: 0.0,
+            ll_mant: 1.0,
+            ll_exp: 0,
             invalid: 0,
             unexplained: 0,
             bad_group: 0,
@@ -172,7 +218,26 @@ impl<const G: usize> PassStats<G> {
         self.e.iter().filter_map(|g| g.get(c)).sum()
     }
 
+    /// `Σ_i ln p(z_i | z*_i, θ_t)` over all used readings, nats.
+    pub fn log_likelihood(&self) -> f64 {
+        // The product is ll_mant·2^ll_exp; ll_exp·ln 2 in two parts (see LN2_HI).
+        let e = self.ll_exp as f64;
+        self.ll + math::ln_f64(self.ll_mant) + e * LN2_LO + e * LN2_HI
+    }
+
     /// Folds one reading in: E-step at `th`, and the probe's Q terms if asked for.
+    ///
+    /// The E-step works on the component densities themselves (linear domain): one `exp` for
+    /// the hit density, one `exp` and one `expm1` for the short one (only where `z ≤ z*`), none
+    /// for max and rand, and no `ln` per reading: the reading's density is multiplied into a
+    /// running product kept as a mantissa in `[1, 2)` and a binary exponent (exact integer
+    /// bookkeeping, so it cannot under- or overflow), and [`PassStats::log_likelihood`] takes one
+    /// `ln` per pass. This needs the density total to be a normal number well inside the
+    /// range: a total outside `[LINEAR_MIN, LINEAR_MAX]` (or not finite) sends the reading to
+    /// the log-domain E-step instead (log-sum-exp, exactly as before), which never underflows.
+    /// Inside that range the two agree to f64 rounding: a component that underflows in the
+    /// linear domain (below 2⁻¹⁰²²) has a responsibility below 2⁻¹⁰²²/`LINEAR_MIN` < 2⁻¹²⁵ in
+    /// both, under the rounding of any responsibility sum it is added to.
     #[inline]
     pub fn visit(
         &mut self,
@@ -182,8 +247,9 @@ impl<const G: usize> PassStats<G> {
         range_m: f32,
         z_star_m: f32,
     ) {
-        let (Some(ln_w), Some(n), Some(e_acc)) = (
+        let (Some(ln_w), Some(lin_w), Some(n), Some(e_acc)) = (
             th.ln_w.get(group),
+            th.lin_w.get(group),
             self.n.get_mut(group),
             self.e.get_mut(group),
         ) else {
@@ -205,45 +271,70 @@ impl<const G: usize> PassStats<G> {
         };
         let d = z - s;
         let u = d * th.inv_sigma;
-        let l_hit = ln_w[0] + th.ln_peak - ln_hit_mass(s, th.zmax, th.inv_sigma) - 0.5 * u * u;
+        let half_u2 = 0.5 * u * u;
+        let mass = hit_mass(s, th.zmax, th.inv_sigma);
         let short_ok = s > 0.0 && z <= s;
         // The short normalizer at θ's λ, shared with the short probe when that is at the same λ
-        // (the E-step pass of the default update): one expm1 and one ln per reading, not two.
+        // (the E-step pass of the truncated updates).
         let short_norm = if short_ok {
             Some(ShortNorm::new(th.lambda, s))
         } else {
             None
         };
-        let l_short = match &short_norm {
-            Some(sn) => ln_w[1] + th.ln_lambda - th.lambda * z - sn.ln_one_minus,
-            None => f64::NEG_INFINITY,
-        };
-        let (l_max, l_rand) = if is_max {
-            (ln_w[2], f64::NEG_INFINITY)
+
+        // Linear domain: the four component densities (1/m; the max one a point mass).
+        let p_hit = if -half_u2 < EXP_IS_ZERO {
+            0.0
         } else {
-            (f64::NEG_INFINITY, ln_w[3] + th.ln_inv_zmax)
+            lin_w[0] * math::exp_f64(-half_u2) / mass
         };
-        let l = [l_hit, l_short, l_max, l_rand];
-        let m = l.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-        if m == f64::NEG_INFINITY || m.is_nan() {
-            self.unexplained += 1;
-            return;
-        }
-        let mut r = [0.0f64; 4];
-        for (ri, &li) in r.iter_mut().zip(&l) {
-            *ri = if li == m {
-                1.0
-            } else if li - m < EXP_IS_ZERO {
-                // exp would round to exactly 0 (this also covers li = −∞).
-                0.0
-            } else {
-                math::exp_f64(li - m)
+        let p_short = match &short_norm {
+            Some(sn) => lin_w[1] * math::exp_f64(-th.lambda * z) / sn.one_minus,
+            None => 0.0,
+        };
+        let (p_max, p_rand) = if is_max {
+            (lin_w[2], 0.0)
+        } else {
+            (0.0, lin_w[3])
+        };
+        let lin_total = p_hit + p_short + p_max + p_rand;
+        let (r, inv_total) = if (LINEAR_MIN..=LINEAR_MAX).contains(&lin_total) {
+            fold_density(&mut self.ll_mant, &mut self.ll_exp, lin_total);
+            ([p_hit, p_short, p_max, p_rand], 1.0 / lin_total)
+        } else {
+            // Log domain (log-sum-exp), for totals the linear form cannot carry.
+            let l_hit = ln_w[0] + th.ln_peak - ln_of_mass(mass) - half_u2;
+            let l_short = match &short_norm {
+                Some(sn) => ln_w[1] + th.ln_lambda - th.lambda * z - math::ln_f64(sn.one_minus),
+                None => f64::NEG_INFINITY,
             };
-        }
-        let total: f64 = r.iter().sum();
-        self.ll += m + math::ln_f64(total);
+            let (l_max, l_rand) = if is_max {
+                (ln_w[2], f64::NEG_INFINITY)
+            } else {
+                (f64::NEG_INFINITY, ln_w[3] + th.ln_inv_zmax)
+            };
+            let l = [l_hit, l_short, l_max, l_rand];
+            let m = l.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+            if m == f64::NEG_INFINITY || m.is_nan() {
+                self.unexplained += 1;
+                return;
+            }
+            let mut r = [0.0f64; 4];
+            for (ri, &li) in r.iter_mut().zip(&l) {
+                *ri = if li == m {
+                    1.0
+                } else if li - m < EXP_IS_ZERO {
+                    // exp would round to exactly 0 (this also covers li = −∞).
+                    0.0
+                } else {
+                    math::exp_f64(li - m)
+                };
+            }
+            let total: f64 = r.iter().sum();
+            self.ll += m + math::ln_f64(total);
+            (r, 1.0 / total)
+        };
         *n += 1;
-        let inv_total = 1.0 / total;
         for (acc, &ri) in e_acc.iter_mut().zip(&r) {
             *acc += ri * inv_total;
         }
@@ -265,13 +356,26 @@ impl<const G: usize> PassStats<G> {
                     Some(sn) if sp.lambda == th.lambda => sn,
                     _ => ShortNorm::new(sp.lambda, s),
                 };
-                let c = short_curve(sp, z, s, &norm);
+                let c = short_curve(sp, z, s, &norm, probe.short_value);
                 for (a, b) in self.short_curve.iter_mut().zip(c) {
                     *a += e_short * b;
                 }
             }
         }
     }
+
+}
+
+/// Multiplies a reading's density `p ∈ [LINEAR_MIN, LINEAR_MAX]` into the running product
+/// `mant·2^exp`. The mantissa stays in `[1, 2)`, so `mant·p` is a normal f64
+/// (`2⁻⁸⁹⁷ ≤ · < 2⁸⁹⁸`) and splitting off its exponent is exact.
+#[inline]
+fn fold_density(mant: &mut f64, exp: &mut i64, p: f64) {
+    let bits = (*mant * p).to_bits();
+    // Biased exponent field (11 bits); the product is normal, so it is in 1..=2046.
+    let biased = ((bits >> 52) & 0x7ff) as i64;
+    *exp += biased - 1023;
+    *mant = f64::from_bits((bits & MANTISSA_BITS) | ONE_BITS);
 }
 
 /// `½·erf(x/√2)` for `x ≥ 0`: the standard normal mass between 0 and `x`.
@@ -285,11 +389,16 @@ fn half_mass(x: f64) -> f64 {
     }
 }
 
-/// `ln(Φ((z_max − z*)/σ) − Φ(−z*/σ))`, the log of `1/η_hit`. 0 (exactly) when both ends are
-/// more than 8.5 σ away.
+/// `Φ((z_max − z*)/σ) − Φ(−z*/σ)`, the hit component's mass on `[0, z_max]`, `1/η_hit`.
+/// Exactly 1.0 (no `erf` call) when both ends are more than `ERF_IS_ONE·√2 ≈ 8.5` σ away.
 #[inline]
-fn ln_hit_mass(s: f64, zmax: f64, inv_sigma: f64) -> f64 {
-    let mass = half_mass((zmax - s) * inv_sigma) + half_mass(s * inv_sigma);
+fn hit_mass(s: f64, zmax: f64, inv_sigma: f64) -> f64 {
+    half_mass((zmax - s) * inv_sigma) + half_mass(s * inv_sigma)
+}
+
+/// `ln(mass)`, 0 (exactly, no call) for a mass of 1.
+#[inline]
+fn ln_of_mass(mass: f64) -> f64 {
     if mass == 1.0 {
         0.0
     } else {
@@ -350,11 +459,16 @@ fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64) -> Curve {
 ///
 /// (concave: with `x = λz*`, `x²e^x/(e^x − 1)² = ((x/2)/sinh(x/2))² ≤ 1`).
 ///
-/// `norm` is [`ShortNorm`] at `(sp.lambda, s)`.
+/// `norm` is [`ShortNorm`] at `(sp.lambda, s)`. Without `value` the first entry is 0 (and no
+/// `ln` is taken).
 #[inline]
-fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm) -> Curve {
+fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm, value: bool) -> Curve {
     let lambda = sp.lambda;
-    let q = sp.ln_lambda - lambda * z - norm.ln_one_minus;
+    let q = if value {
+        sp.ln_lambda - lambda * z - math::ln_f64(norm.one_minus)
+    } else {
+        0.0
+    };
     let g = sp.inv_lambda - z - s / norm.em1;
     let h = -sp.inv_lambda2 + s * s / (norm.em1 * norm.one_minus);
     [q, g, h]
@@ -362,13 +476,12 @@ fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm) -> Curve {
 
 /// The truncation normalizer of the short component at rate λ and wall `z* > 0`:
 /// `1 − e^{−λz*}`, formed as `(e^x − 1)/(e^x − 1 + 1)` with `x = λz*` (one `expm1`, no
-/// cancellation; `1` once `e^x` overflows), its logarithm, and `e^x − 1` itself (which the
-/// λ-derivatives of [`short_curve`] need).
+/// cancellation; `1` once `e^x` overflows), and `e^x − 1` itself (which the λ-derivatives of
+/// [`short_curve`] need). Its logarithm is taken only where needed.
 #[derive(Clone, Copy, Debug)]
 struct ShortNorm {
     em1: f64,
     one_minus: f64,
-    ln_one_minus: f64,
 }
 
 impl ShortNorm {
@@ -380,10 +493,6 @@ impl ShortNorm {
         } else {
             1.0
         };
-        Self {
-            em1,
-            one_minus,
-            ln_one_minus: math::ln_f64(one_minus),
-        }
+        Self { em1, one_minus }
     }
 }
