@@ -93,6 +93,7 @@
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 
+mod exp;
 mod pass;
 mod solve;
 

@@ -5,6 +5,7 @@
 //!
 //! Nothing per datum is kept: a pass is a fold into [`PassStats`].
 
+use super::exp::{self, LN2_HI, LN2_LO};
 use crate::math;
 use crate::scan::Reading;
 
@@ -32,12 +33,6 @@ const LINEAR_MAX: f64 = 1e270;
 const MANTISSA_BITS: u64 = (1u64 << 52) - 1;
 /// The bits of 1.0 (biased exponent 1023, fraction 0).
 const ONE_BITS: u64 = 1023u64 << 52;
-
-/// `ln 2` split as `LN2_HI + LN2_LO` (fdlibm's split): `LN2_HI` = 0x3FE62E42FEE00000 has 32
-/// significant bits (its low 21 fraction bits are 0), so `k·LN2_HI` is exact for any integer
-/// `|k| < 2²¹`; beyond that it rounds by half an ulp, like any other term of the sum.
-const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
-const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
 
 /// The current parameters with the constants derived from them, f64.
 #[derive(Clone, Copy, Debug)]
@@ -285,11 +280,14 @@ impl<const G: usize> PassStats<G> {
         // Linear domain: the four component densities (1/m; the max one a point mass).
         let p_hit = if -half_u2 < EXP_IS_ZERO {
             0.0
+        } else if mass == 1.0 {
+            // The common case (z* more than 8.5 σ from both ends): no division.
+            lin_w[0] * exp::exp(-half_u2)
         } else {
-            lin_w[0] * math::exp_f64(-half_u2) / mass
+            lin_w[0] * exp::exp(-half_u2) / mass
         };
         let p_short = match &short_norm {
-            Some(sn) => lin_w[1] * math::exp_f64(-th.lambda * z) / sn.one_minus,
+            Some(sn) => lin_w[1] * exp::exp(-th.lambda * z) * sn.inv_one_minus(),
             None => 0.0,
         };
         let (p_max, p_rand) = if is_max {
@@ -305,7 +303,7 @@ impl<const G: usize> PassStats<G> {
             // Log domain (log-sum-exp), for totals the linear form cannot carry.
             let l_hit = ln_w[0] + th.ln_peak - ln_of_mass(mass) - half_u2;
             let l_short = match &short_norm {
-                Some(sn) => ln_w[1] + th.ln_lambda - th.lambda * z - math::ln_f64(sn.one_minus),
+                Some(sn) => ln_w[1] + th.ln_lambda - th.lambda * z - math::ln_f64(sn.one_minus()),
                 None => f64::NEG_INFINITY,
             };
             let (l_max, l_rand) = if is_max {
@@ -465,34 +463,49 @@ fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64) -> Curve {
 fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm, value: bool) -> Curve {
     let lambda = sp.lambda;
     let q = if value {
-        sp.ln_lambda - lambda * z - math::ln_f64(norm.one_minus)
+        sp.ln_lambda - lambda * z - math::ln_f64(norm.one_minus())
     } else {
         0.0
     };
-    let g = sp.inv_lambda - z - s / norm.em1;
-    let h = -sp.inv_lambda2 + s * s / (norm.em1 * norm.one_minus);
+    // z*/(e^x − 1) and z*²·e^x/(e^x − 1)² = z*²·(1/(e^x − 1))·(1 + 1/(e^x − 1)).
+    let g = sp.inv_lambda - z - s * norm.inv_em1;
+    let h = -sp.inv_lambda2 + s * s * norm.inv_em1 * norm.inv_one_minus();
     [q, g, h]
 }
 
-/// The truncation normalizer of the short component at rate λ and wall `z* > 0`:
-/// `1 − e^{−λz*}`, formed as `(e^x − 1)/(e^x − 1 + 1)` with `x = λz*` (one `expm1`, no
-/// cancellation; `1` once `e^x` overflows), and `e^x − 1` itself (which the λ-derivatives of
-/// [`short_curve`] need). Its logarithm is taken only where needed.
+/// The truncation normalizer of the short component at rate λ and wall `z* > 0`,
+/// `1 − e^{−λz*}`, through `e^x − 1` with `x = λz*` (no cancellation) and its reciprocal: one
+/// `e^x − 1` and one division per reading. `1/(1 − e^{−x}) = 1 + 1/(e^x − 1)`; once `e^x`
+/// overflows the reciprocal is 0 and the normalizer 1.
 #[derive(Clone, Copy, Debug)]
 struct ShortNorm {
     em1: f64,
-    one_minus: f64,
+    inv_em1: f64,
 }
 
 impl ShortNorm {
     #[inline]
     fn new(lambda: f64, s: f64) -> Self {
-        let em1 = math::expm1_f64(lambda * s);
-        let one_minus = if em1.is_finite() {
-            em1 / (em1 + 1.0)
+        let em1 = exp::expm1_nonneg(lambda * s);
+        Self {
+            em1,
+            inv_em1: 1.0 / em1,
+        }
+    }
+
+    /// `1/(1 − e^{−x})`.
+    #[inline]
+    fn inv_one_minus(&self) -> f64 {
+        1.0 + self.inv_em1
+    }
+
+    /// `1 − e^{−x}`, as `(e^x − 1)/(e^x − 1 + 1)`.
+    #[inline]
+    fn one_minus(&self) -> f64 {
+        if self.em1.is_finite() {
+            self.em1 / (self.em1 + 1.0)
         } else {
             1.0
-        };
-        Self { em1, one_minus }
+        }
     }
 }
