@@ -95,11 +95,17 @@ mod tests {
         }
         for k in -1021..1021 {
             let x = (f64::from(k) + 0.5) * core::f64::consts::LN_2;
-            for y in [x, f64::from_bits(x.to_bits() + 1), f64::from_bits(x.to_bits() - 1)] {
+            for y in [
+                x,
+                f64::from_bits(x.to_bits() + 1),
+                f64::from_bits(x.to_bits() - 1),
+            ] {
                 worst = worst.max(ulps(exp(y), libm::exp(y)));
             }
         }
-        for x in [0.0, -0.0, 1e-300, -1e-300, 1e-17, -1e-17, 0.5, -0.5, 1.0, -1.0] {
+        for x in [
+            0.0, -0.0, 1e-300, -1e-300, 1e-17, -1e-17, 0.5, -0.5, 1.0, -1.0,
+        ] {
             worst = worst.max(ulps(exp(x), libm::exp(x)));
         }
         assert!(worst <= 1, "worst {worst} ulp");

@@ -406,6 +406,7 @@ where
         for (g, z, s) in source() {
             st.visit(th, probe, g, z, s);
         }
+        st.finish(probe);
         st
     };
 

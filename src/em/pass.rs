@@ -177,8 +177,12 @@ pub(crate) struct PassStats<const G: usize> {
     pub hit_sq: f64,
     /// `Σ_i e_{i,short}·z_i`.
     pub short_z: f64,
-    /// Hit part of Q at the probe τ (constants dropped) and its τ-derivatives.
+    /// Hit part of Q at the probe τ (constants dropped) and its τ-derivatives (complete only
+    /// after [`PassStats::finish`]).
     pub hit_curve: Curve,
+    /// `Σ e_hit` and `Σ e_hit·d²` over the readings whose hit term at the probe τ has the
+    /// untruncated form (see [`hit_curve_interior`]), folded into `hit_curve` by `finish`.
+    hit_interior: [f64; 2],
     /// Short part of Q at the probe λ and its λ-derivatives.
     pub short_curve: Curve,
 }
@@ -197,6 +201,7 @@ impl<const G: usize> Default for PassStats<G> {
             hit_sq: 0.0,
             short_z: 0.0,
             hit_curve: [0.0; 3],
+            hit_interior: [0.0; 2],
             short_curve: [0.0; 3],
         }
     }
@@ -218,6 +223,19 @@ impl<const G: usize> PassStats<G> {
         // The product is ll_mant·2^ll_exp; ll_exp·ln 2 in two parts (see LN2_HI).
         let e = self.ll_exp as f64;
         self.ll + math::ln_f64(self.ll_mant) + e * LN2_LO + e * LN2_HI
+    }
+
+    /// Completes the pass's sums: adds the interior hit terms (see [`hit_curve_interior`]) at
+    /// the pass's `probe`. Call once, after the last [`PassStats::visit`].
+    pub fn finish(&mut self, probe: &Probe) {
+        if let Some(hp) = &probe.hit {
+            let [e, sq] = self.hit_interior;
+            // Σ e·(½ln τ − τd²/2), Σ e·(−d²/2 + 1/(2τ)), Σ e·(−2/(4τ²)): E[u²] = 1, E[u⁴] = 3.
+            self.hit_curve[0] += hp.half_ln_tau * e - 0.5 * hp.tau * sq;
+            self.hit_curve[1] += -0.5 * sq + hp.inv_2tau * e;
+            self.hit_curve[2] += -2.0 * hp.inv_4tau2 * e;
+        }
+        self.hit_interior = [0.0; 2];
     }
 
     /// Folds one reading in: E-step at `th`, and the probe's Q terms if asked for.
@@ -342,9 +360,15 @@ impl<const G: usize> PassStats<G> {
         self.short_z += e_short * z;
         if let Some(hp) = &probe.hit {
             if e_hit > 0.0 {
-                let c = hit_curve(hp, d, s, th.zmax);
-                for (a, b) in self.hit_curve.iter_mut().zip(c) {
-                    *a += e_hit * b;
+                if hit_curve_interior(hp, s, th.zmax) {
+                    // ℓ is a + b·d² with a, b fixed by τ: two sums, folded in by `finish`.
+                    self.hit_interior[0] += e_hit;
+                    self.hit_interior[1] += e_hit * d * d;
+                } else {
+                    let c = hit_curve(hp, d, s, th.zmax);
+                    for (a, b) in self.hit_curve.iter_mut().zip(c) {
+                        *a += e_hit * b;
+                    }
                 }
             }
         }
@@ -361,7 +385,6 @@ impl<const G: usize> PassStats<G> {
             }
         }
     }
-
 }
 
 /// Multiplies a reading's density `p ∈ [LINEAR_MIN, LINEAR_MAX]` into the running product
@@ -413,6 +436,18 @@ fn phi_terms(x: f64) -> (f64, f64) {
     }
     let p = INV_SQRT_2PI_F64 * math::exp_f64(-0.5 * x * x);
     (x * p, x * x * x * p)
+}
+
+/// Whether a reading's hit term at the probe τ is untruncated to f64 precision: both ends
+/// `α = −z*·√τ`, `β = (z_max − z*)·√τ` beyond 10 in magnitude. Then [`hit_curve`] takes its
+/// first branch exactly (`x² > 100` zeroes both density terms, and `|x|/√2 > 7.07 > ERF_IS_ONE`
+/// makes the mass exactly 1), so its value is `(½ln τ − τd²/2, −d²/2 + 1/(2τ), −2/(4τ²))`,
+/// linear in `1` and `d²`: the pass sums `e_hit` and `e_hit·d²` instead (no `erf`, no `exp`).
+#[inline]
+fn hit_curve_interior(hp: &HitProbe, s: f64, zmax: f64) -> bool {
+    let alpha = -s * hp.sqrt_tau;
+    let beta = (zmax - s) * hp.sqrt_tau;
+    alpha * alpha > 100.0 && beta * beta > 100.0
 }
 
 /// One reading's hit term of Q as a function of the precision `τ = 1/σ²` (the constant
@@ -507,5 +542,77 @@ impl ShortNorm {
         } else {
             1.0
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The skipped `erf` of [`half_mass`] is the full formula bit for bit: `erfc(6) ≈ 2.2e-17`
+    /// is under half an ulp of 1 (2⁻⁵⁴ ≈ 5.6e-17), so `erf(y)` rounds to exactly 1.0 from
+    /// `y = 6` on (erf is increasing), and `0.5·1.0 = 0.5`.
+    #[test]
+    fn skipped_erf_is_exact_at_and_beyond_the_threshold() {
+        let mut y = ERF_IS_ONE;
+        while y < 40.0 {
+            assert_eq!(math::erf_f64(y).to_bits(), 1.0f64.to_bits(), "erf({y})");
+            y = y * 1.001 + 1e-3;
+        }
+        for y in [
+            ERF_IS_ONE,
+            f64::from_bits(ERF_IS_ONE.to_bits() + 1),
+            1e3,
+            1e300,
+        ] {
+            assert_eq!(math::erf_f64(y).to_bits(), 1.0f64.to_bits(), "erf({y})");
+        }
+        // half_mass with the skip against the formula, across the threshold x = 6·√2.
+        for i in 0..20_000 {
+            let x = 8.0 + f64::from(i) * 1e-4;
+            assert_eq!(
+                half_mass(x).to_bits(),
+                (0.5 * math::erf_f64(x * FRAC_1_SQRT_2_F64)).to_bits(),
+                "{x}"
+            );
+        }
+        // And the hit mass is exactly 1 once both ends are past the threshold.
+        assert_eq!(hit_mass(5.0, 30.0, 1.0 / 0.15).to_bits(), 1.0f64.to_bits());
+        assert!(hit_mass(1.0, 30.0, 1.0 / 0.15) < 1.0);
+    }
+
+    /// Where [`hit_curve_interior`] holds, [`hit_curve`] is exactly the closed form that
+    /// [`PassStats::finish`] sums (so the interior shortcut only reassociates the sum).
+    #[test]
+    fn interior_hit_curve_is_the_closed_form() {
+        let zmax = 30.0;
+        let mut interior = 0;
+        for sigma in [0.01, 0.15, 1.0, 3.0] {
+            let probe = Probe::new(Some(1.0 / (sigma * sigma)), None);
+            let hp = probe.hit.unwrap();
+            for i in 0..=3_000 {
+                let s = zmax * f64::from(i) / 3_000.0;
+                let d = 0.37 * sigma - 0.001 * f64::from(i % 7);
+                let full = hit_curve(&hp, d, s, zmax);
+                if hit_curve_interior(&hp, s, zmax) {
+                    interior += 1;
+                    let closed = [
+                        hp.half_ln_tau - 0.5 * hp.tau * d * d,
+                        -0.5 * d * d + hp.inv_2tau,
+                        -2.0 * hp.inv_4tau2,
+                    ];
+                    for (a, b) in full.iter().zip(closed) {
+                        assert_eq!(a.to_bits(), b.to_bits(), "σ {sigma} z* {s}");
+                    }
+                } else {
+                    // Near an end the truncation terms matter: not the closed form.
+                    assert!(
+                        s * s / (sigma * sigma) <= 100.0 + 1e-9
+                            || (zmax - s) * (zmax - s) / (sigma * sigma) <= 100.0 + 1e-9
+                    );
+                }
+            }
+        }
+        assert!(interior > 5_000, "{interior}");
     }
 }
