@@ -47,30 +47,7 @@ pub(crate) fn exp(x: f64) -> f64 {
     if !(x.abs() <= FAST_LIMIT) {
         return math::exp_f64(x);
     }
-    exp_core(x)
-}
-
-/// `e^x` of each lane, within 1 ulp, as [`exp`]. The lanes go through the same straight-line
-/// arithmetic (which the compiler may evaluate two or more at a time in SIMD registers); lanes
-/// outside `|x| ≤ 708` are then replaced: 0 below −746 (where `e^x` rounds to 0), libm
-/// otherwise.
-#[inline]
-pub(crate) fn exp_lanes<const N: usize>(x: [f64; N]) -> [f64; N] {
-    let mut y = x.map(exp_core);
-    for (yi, &xi) in y.iter_mut().zip(&x) {
-        if !(xi.abs() <= FAST_LIMIT) {
-            *yi = if xi < -746.0 { 0.0 } else { math::exp_f64(xi) };
-        }
-    }
-    y
-}
-
-/// The inline `e^x` for `|x| ≤ 708` (any other input gives a meaningless finite or NaN value,
-/// without panicking).
-#[inline(always)]
-fn exp_core(x: f64) -> f64 {
-    let t = x * LOG2E + ROUND_SHIFT;
-    let kf = t - ROUND_SHIFT;
+    let kf = (x * LOG2E + ROUND_SHIFT) - ROUND_SHIFT;
     let r = (x - kf * LN2_HI) - kf * LN2_LO;
     let r2 = r * r;
     let r4 = r2 * r2;
@@ -81,21 +58,17 @@ fn exp_core(x: f64) -> f64 {
         + r4 * ((C6 + r * C7) + r2 * (C8 + r * C9))
         + r8 * ((C10 + r * C11) + r2 * (C12 + r * C13));
     let p = 1.0 + (r + r2 * q);
-    // t = 1.5·2⁵² + k exactly, and all such t share one binade (ulp 1), so the integer k is the
-    // difference of the bit patterns (two's complement for k < 0). |k| ≤ 1022 here, so the
-    // biased exponent k + 1023 is in 1..=2045: 2^k is a normal f64.
-    let k = t.to_bits().wrapping_sub(ROUND_SHIFT.to_bits());
-    let scale = f64::from_bits(k.wrapping_add(1023) << 52);
+    // |kf| ≤ 1022 here, so the biased exponent kf + 1023 is in 1..=2045: a normal 2^kf.
+    let scale = f64::from_bits(((kf as i64 + 1023) as u64) << 52);
     p * scale
 }
 
-/// `e^x − 1` for `x ≥ 0` given `ex = e^x` (from [`exp`] or [`exp_lanes`]): `ex − 1` from
-/// `x ≥ ln 2` on (`e^x ≥ 2`, subtracting 1 loses no accuracy: within 2 ulp), libm's `expm1`
-/// below (which avoids the cancellation).
+/// `e^x − 1` for `x ≥ 0`. From `x ≥ ln 2` on, `e^x ≥ 2` and subtracting 1 loses no accuracy
+/// (within 2 ulp); below that libm's `expm1` (which avoids the cancellation).
 #[inline]
-pub(crate) fn expm1_from_exp(x: f64, ex: f64) -> f64 {
+pub(crate) fn expm1_nonneg(x: f64) -> f64 {
     if x >= core::f64::consts::LN_2 {
-        ex - 1.0
+        exp(x) - 1.0
     } else {
         math::expm1_f64(x)
     }
@@ -141,16 +114,6 @@ mod tests {
         assert_eq!(exp(-746.0), 0.0);
         assert_eq!(exp(-709.0).to_bits(), libm::exp(-709.0).to_bits());
         assert!(exp(f64::NAN).is_nan());
-        // The lane version agrees with the scalar one bit for bit, in and out of range.
-        let xs = [
-            -800.0, -746.0, -745.5, -720.0, -708.0, -1.5, 0.0, 0.3, 700.0, 708.0, 709.5, 710.0,
-        ];
-        for w in xs.windows(4) {
-            let y = exp_lanes([w[0], w[1], w[2], w[3]]);
-            for (a, &x) in y.iter().zip(w) {
-                assert_eq!(a.to_bits(), exp(x).to_bits(), "{x}");
-            }
-        }
     }
 
     /// Within 2 ulp of libm's `expm1` from ln 2 on, identical below.
@@ -160,7 +123,7 @@ mod tests {
         let n = 1_000_000;
         for i in 0..=n {
             let x = 720.0 * (i as f64) / (n as f64);
-            let (a, b) = (expm1_from_exp(x, exp(x)), libm::expm1(x));
+            let (a, b) = (expm1_nonneg(x), libm::expm1(x));
             if b.is_finite() {
                 worst = worst.max(ulps(a, b));
             } else {

@@ -287,30 +287,25 @@ impl<const G: usize> PassStats<G> {
         let half_u2 = 0.5 * u * u;
         let mass = hit_mass(s, th.zmax, th.inv_sigma);
         let short_ok = s > 0.0 && z <= s;
-        // The three exponentials of the reading side by side (the hit density, the short
-        // density, the short normalizer), so that they can share SIMD registers.
-        // Without a short term its lanes get 0 (no libm fallback for a large λ·z*).
-        let lambda_s = if short_ok { th.lambda * s } else { 0.0 };
-        let minus_lambda_z = if short_ok { -th.lambda * z } else { 0.0 };
-        let [exp_hit, exp_short, exp_norm] = exp::exp_lanes([-half_u2, minus_lambda_z, lambda_s]);
         // The short normalizer at θ's λ, shared with the short probe when that is at the same λ
         // (the E-step pass of the truncated updates).
         let short_norm = if short_ok {
-            Some(ShortNorm::from_exp(lambda_s, exp_norm))
+            Some(ShortNorm::new(th.lambda, s))
         } else {
             None
         };
 
-        // Linear domain: the four component densities (1/m; the max one a point mass). Below
-        // −746 the hit exponential is exactly 0 (exp_lanes).
-        let p_hit = if mass == 1.0 {
+        // Linear domain: the four component densities (1/m; the max one a point mass).
+        let p_hit = if -half_u2 < EXP_IS_ZERO {
+            0.0
+        } else if mass == 1.0 {
             // The common case (z* more than 8.5 σ from both ends): no division.
-            lin_w[0] * exp_hit
+            lin_w[0] * exp::exp(-half_u2)
         } else {
-            lin_w[0] * exp_hit / mass
+            lin_w[0] * exp::exp(-half_u2) / mass
         };
         let p_short = match &short_norm {
-            Some(sn) => lin_w[1] * exp_short * sn.inv_one_minus(),
+            Some(sn) => lin_w[1] * exp::exp(-th.lambda * z) * sn.inv_one_minus(),
             None => 0.0,
         };
         let (p_max, p_rand) = if is_max {
@@ -526,14 +521,7 @@ struct ShortNorm {
 impl ShortNorm {
     #[inline]
     fn new(lambda: f64, s: f64) -> Self {
-        let x = lambda * s;
-        Self::from_exp(x, exp::exp(x))
-    }
-
-    /// From `x = λz*` and `e^x`.
-    #[inline]
-    fn from_exp(x: f64, ex: f64) -> Self {
-        let em1 = exp::expm1_from_exp(x, ex);
+        let em1 = exp::expm1_nonneg(lambda * s);
         Self {
             em1,
             inv_em1: 1.0 / em1,
