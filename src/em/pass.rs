@@ -434,7 +434,7 @@ fn phi_terms(x: f64) -> (f64, f64) {
     if x * x > 100.0 {
         return (0.0, 0.0);
     }
-    let p = INV_SQRT_2PI_F64 * math::exp_f64(-0.5 * x * x);
+    let p = INV_SQRT_2PI_F64 * exp::exp(-0.5 * x * x);
     (x * p, x * x * x * p)
 }
 
