@@ -19,10 +19,10 @@ const LOG2E: f64 = core::f64::consts::LOG2_E;
 const ROUND_SHIFT: f64 = 6_755_399_441_055_744.0;
 /// `ln 2` split as `LN2_HI + LN2_LO` (fdlibm's split): `LN2_HI` = 0x3FE62E42FEE00000 has 32
 /// significant bits (its low 21 fraction bits are 0), so `k·LN2_HI` is exact for any integer
-/// `|k| < 2²¹`.
-pub(crate) const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
-/// The rest of `ln 2`.
-pub(crate) const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+/// `|k| < 2²¹` (6.9314718036912382e-1).
+pub(crate) const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_FEE0_0000);
+/// The rest of `ln 2` (1.9082149292705877e-10).
+pub(crate) const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
 /// Largest `|x|` of the inline path: `e^{±708}` and the scale `2^k`, `|k| ≤ 1022`, are normal.
 const FAST_LIMIT: f64 = 708.0;
 
@@ -43,8 +43,9 @@ const C13: f64 = 1.0 / 6_227_020_800.0;
 /// `e^x`, within 1 ulp.
 #[inline]
 pub(crate) fn exp(x: f64) -> f64 {
-    // `!(a <= b)` also sends NaN to libm.
-    if !(x.abs() <= FAST_LIMIT) {
+    // NaN fails the comparison too, and goes to libm.
+    let inline = x.abs() <= FAST_LIMIT;
+    if !inline {
         return math::exp_f64(x);
     }
     let kf = (x * LOG2E + ROUND_SHIFT) - ROUND_SHIFT;

@@ -37,10 +37,24 @@
 //!   safeguarded Newton step gives the next σ and λ (Lange's EM-gradient step, locally equivalent
 //!   to EM). The next pass, which is the next E-step anyway, checks the data log-likelihood; if it
 //!   went down, that pass is discarded and the [`ShapeUpdate::TruncatedExact`] step is taken from
-//!   the previous parameters (guaranteed by the generalized-EM argument below).
+//!   the previous parameters (guaranteed by the generalized-EM argument below), after one more
+//!   pass there for the values of the shape terms (the one-step pass computes only their
+//!   derivatives, which saves an `ln` per short-range reading).
 //! - [`ShapeUpdate::TruncatedExact`] makes one E-step pass plus one per Newton evaluation (each re-runs
 //!   the E-step at the same θ and evaluates the shape terms at the candidate), typically 1–3, at
 //!   most [`EmConfig::max_newton_passes`].
+//!
+//! # Cost per reading
+//! The E-step works on the component densities, not their logarithms: an inline f64 `e^x`
+//! (within 1 ulp of libm's; no call, no division) for the hit density, and for a reading below
+//! its `z*` one more for the short density and one for its normalizer; the max and rand
+//! densities are constants of the pass. The data log-likelihood is kept as a running product
+//! (mantissa and binary exponent, exact bookkeeping), so there is one `ln` per pass, not per
+//! reading. A reading whose density total is outside `[1e-270, 1e270]` goes through a
+//! log-sum-exp E-step instead, which cannot underflow; the two agree to f64 rounding. The
+//! truncated-Gaussian normalizer skips its `erf` pair where it is exactly 1 in f64 (both ends
+//! more than 8.5 σ away), and so do the probe's hit terms, which there are linear in `1` and
+//! `(z − z*)²` and are summed as two numbers per pass.
 //!
 //! # Precision
 //! All accumulation and all densities here are f64 (the scoring path of [`crate::BeamModel`] is
