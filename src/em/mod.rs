@@ -37,10 +37,24 @@
 //!   safeguarded Newton step gives the next σ and λ (Lange's EM-gradient step, locally equivalent
 //!   to EM). The next pass, which is the next E-step anyway, checks the data log-likelihood; if it
 //!   went down, that pass is discarded and the [`ShapeUpdate::TruncatedExact`] step is taken from
-//!   the previous parameters (guaranteed by the generalized-EM argument below).
+//!   the previous parameters (guaranteed by the generalized-EM argument below), after one more
+//!   pass there for the values of the shape terms (the one-step pass computes only their
+//!   derivatives, which saves an `ln` per short-range reading).
 //! - [`ShapeUpdate::TruncatedExact`] makes one E-step pass plus one per Newton evaluation (each re-runs
 //!   the E-step at the same θ and evaluates the shape terms at the candidate), typically 1–3, at
 //!   most [`EmConfig::max_newton_passes`].
+//!
+//! # Cost per reading
+//! The E-step works on the component densities, not their logarithms: an inline f64 `e^x`
+//! (within 1 ulp of libm's; no call, no division) for the hit density, and for a reading below
+//! its `z*` one more for the short density and one for its normalizer; the max and rand
+//! densities are constants of the pass. The data log-likelihood is kept as a running product
+//! (mantissa and binary exponent, exact bookkeeping), so there is one `ln` per pass, not per
+//! reading. A reading whose density total is outside `[1e-270, 1e270]` goes through a
+//! log-sum-exp E-step instead, which cannot underflow; the two agree to f64 rounding. The
+//! truncated-Gaussian normalizer skips its `erf` pair where it is exactly 1 in f64 (both ends
+//! more than 8.5 σ away), and so do the probe's hit terms, which there are linear in `1` and
+//! `(z − z*)²` and are summed as two numbers per pass.
 //!
 //! # Precision
 //! All accumulation and all densities here are f64 (the scoring path of [`crate::BeamModel`] is
@@ -93,6 +107,7 @@
 //! # Ok::<(), Box<dyn core::error::Error>>(())
 //! ```
 
+mod exp;
 mod pass;
 mod solve;
 
@@ -405,6 +420,7 @@ where
         for (g, z, s) in source() {
             st.visit(th, probe, g, z, s);
         }
+        st.finish(probe);
         st
     };
 
@@ -419,8 +435,12 @@ where
     let mut proposal_from: Option<Saved<G>> = None;
     let (stop, last) = loop {
         let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
-        let probe = if truncated {
+        let probe = if exact {
             Probe::at(1.0 / (sigma * sigma), lambda)
+        } else if truncated {
+            // The one-step update needs only the derivatives; the fallback re-evaluates the
+            // value if it is ever needed.
+            Probe::derivatives_at(1.0 / (sigma * sigma), lambda)
         } else {
             Probe::default()
         };
@@ -430,20 +450,23 @@ where
         if used == 0 {
             break (StopReason::NoData, st);
         }
-        let mean_ll = st.ll / used as f64;
+        let mean_ll = st.log_likelihood() / used as f64;
         if let Some(prev) = proposal_from.take() {
             if mean_ll < prev.mean_ll {
                 // The one-step Newton proposal lowered the likelihood: take the generalized EM
-                // step from the previous parameters instead (guaranteed not to lower it).
+                // step from the previous parameters instead (guaranteed not to lower it). Its
+                // start needs the shape terms' values at the previous σ, λ, which the one-step
+                // pass did not compute: one more pass at the previous θ (same E-step).
+                let first = run(&prev.theta, &Probe::at(tau_of(prev.sigma), prev.lambda));
                 let (s, l, extra) = newton_shapes(
                     config,
                     &run,
                     &prev.theta,
-                    &prev.stats,
+                    &first,
                     (prev.sigma, prev.lambda),
                     bounds,
                 );
-                passes = passes.saturating_add(extra);
+                passes = passes.saturating_add(extra.saturating_add(1));
                 w = prev.new_weights;
                 sigma = s;
                 lambda = l;
@@ -512,7 +535,6 @@ where
             };
             proposal_from = Some(Saved {
                 theta: th,
-                stats: st,
                 sigma,
                 lambda,
                 new_weights: new_w,
@@ -566,7 +588,6 @@ where
 #[derive(Clone, Copy)]
 struct Saved<const G: usize> {
     theta: Theta<G>,
-    stats: PassStats<G>,
     sigma: f64,
     lambda: f64,
     new_weights: [[f32; 4]; G],

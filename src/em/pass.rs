@@ -5,6 +5,7 @@
 //!
 //! Nothing per datum is kept: a pass is a fold into [`PassStats`].
 
+use super::exp::{self, LN2_HI, LN2_LO};
 use crate::math;
 use crate::scan::Reading;
 
@@ -23,11 +24,24 @@ const ERF_IS_ONE: f64 = 6.0;
 /// subnormal), so the call is skipped without changing a bit of the result.
 const EXP_IS_ZERO: f64 = -746.0;
 
+/// Range of a reading's density total (1/m) handled by the linear E-step of
+/// [`PassStats::visit`] (`≈ 2⁻⁸⁹⁷` to `2⁸⁹⁷`); outside it, the log-domain E-step.
+const LINEAR_MIN: f64 = 1e-270;
+const LINEAR_MAX: f64 = 1e270;
+
+/// The 52 fraction bits of an f64.
+const MANTISSA_BITS: u64 = (1u64 << 52) - 1;
+/// The bits of 1.0 (biased exponent 1023, fraction 0).
+const ONE_BITS: u64 = 1023u64 << 52;
+
 /// The current parameters with the constants derived from them, f64.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Theta<const G: usize> {
     /// `ln w_c` per group, `[hit, short, max, rand]` (−∞ for a zero weight).
     pub ln_w: [[f64; 4]; G],
+    /// The per-reading constant factor of each component's density per group, for the linear
+    /// E-step: `[w_hit/(σ·√(2π)) (1/m), w_short·λ (1/m), w_max, w_rand/z_max (1/m)]`.
+    pub lin_w: [[f64; 4]; G],
     pub inv_sigma: f64,
     /// `−ln σ − ln √(2π)`.
     pub ln_peak: f64,
@@ -50,8 +64,14 @@ impl<const G: usize> Theta<G> {
         let sigma = f64::from(sigma_m);
         let lambda = f64::from(lambda_per_m);
         let zmax = f64::from(zmax_m);
+        let mut lin_w = [[0.0f64; 4]; G];
+        for (lg, wg) in lin_w.iter_mut().zip(w) {
+            let [wh, ws, wm, wr] = wg.map(f64::from);
+            *lg = [wh * INV_SQRT_2PI_F64 / sigma, ws * lambda, wm, wr / zmax];
+        }
         Self {
             ln_w,
+            lin_w,
             inv_sigma: 1.0 / sigma,
             ln_peak: -math::ln_f64(sigma) - LN_SQRT_2PI_F64,
             lambda,
@@ -69,8 +89,11 @@ impl<const G: usize> Theta<G> {
 pub(crate) struct Probe {
     hit: Option<HitProbe>,
     short: Option<ShortProbe>,
+    /// Whether the value of the short term (`Curve[0]` of [`PassStats::short_curve`]) is wanted.
+    /// Without it the pass skips one `ln` per short-range reading and leaves that entry 0; the
+    /// derivatives are always computed.
+    short_value: bool,
 }
-
 /// Constants of a hit probe at precision `τ = 1/σ²` (1/m²).
 #[derive(Clone, Copy, Debug)]
 struct HitProbe {
@@ -107,12 +130,22 @@ impl Probe {
                 inv_lambda: 1.0 / lambda,
                 inv_lambda2: 1.0 / (lambda * lambda),
             }),
+            short_value: true,
         }
     }
 
     /// A probe at both `τ` and `λ`.
     pub fn at(tau: f64, lambda: f64) -> Self {
         Self::new(Some(tau), Some(lambda))
+    }
+
+    /// A probe at both `τ` and `λ` that needs only the derivatives of the short term, not its
+    /// value (the one-step update of [`super::ShapeUpdate::Truncated`]).
+    pub fn derivatives_at(tau: f64, lambda: f64) -> Self {
+        Self {
+            short_value: false,
+            ..Self::at(tau, lambda)
+        }
     }
 }
 
@@ -126,8 +159,14 @@ pub(crate) struct PassStats<const G: usize> {
     pub n: [u64; G],
     /// `Σ_i e_{i,c}` per group.
     pub e: [[f64; 4]; G],
-    /// `Σ_i ln p(z_i | z*_i, θ_t)`.
-    pub ll: f64,
+    /// `Σ_i ln p(z_i | z*_i, θ_t)` over the readings of the log-domain E-step (see
+    /// [`PassStats::visit`]); the others are in `ll_mant`, `ll_exp`. Read the total with
+    /// [`PassStats::log_likelihood`].
+    ll: f64,
+    /// Mantissa of `Π_i p(z_i | z*_i, θ_t)` over the readings of the linear E-step, in `[1, 2)`.
+    ll_mant: f64,
+    /// Binary exponent of that product: the product is `ll_mant · 2^ll_exp`.
+    ll_exp: i64,
     /// NaN or negative readings.
     pub invalid: u64,
     /// Readings no cause with non-zero weight explains.
@@ -138,8 +177,12 @@ pub(crate) struct PassStats<const G: usize> {
     pub hit_sq: f64,
     /// `Σ_i e_{i,short}·z_i`.
     pub short_z: f64,
-    /// Hit part of Q at the probe τ (constants dropped) and its τ-derivatives.
+    /// Hit part of Q at the probe τ (constants dropped) and its τ-derivatives (complete only
+    /// after [`PassStats::finish`]).
     pub hit_curve: Curve,
+    /// `Σ e_hit` and `Σ e_hit·d²` over the readings whose hit term at the probe τ has the
+    /// untruncated form (see [`hit_curve_interior`]), folded into `hit_curve` by `finish`.
+    hit_interior: [f64; 2],
     /// Short part of Q at the probe λ and its λ-derivatives.
     pub short_curve: Curve,
 }
@@ -150,12 +193,15 @@ impl<const G: usize> Default for PassStats<G> {
             n: [0; G],
             e: [[0.0; 4]; G],
             ll: 0.0,
+            ll_mant: 1.0,
+            ll_exp: 0,
             invalid: 0,
             unexplained: 0,
             bad_group: 0,
             hit_sq: 0.0,
             short_z: 0.0,
             hit_curve: [0.0; 3],
+            hit_interior: [0.0; 2],
             short_curve: [0.0; 3],
         }
     }
@@ -172,7 +218,39 @@ impl<const G: usize> PassStats<G> {
         self.e.iter().filter_map(|g| g.get(c)).sum()
     }
 
+    /// `Σ_i ln p(z_i | z*_i, θ_t)` over all used readings, nats.
+    pub fn log_likelihood(&self) -> f64 {
+        // The product is ll_mant·2^ll_exp; ll_exp·ln 2 in two parts (see LN2_HI).
+        let e = self.ll_exp as f64;
+        self.ll + math::ln_f64(self.ll_mant) + e * LN2_LO + e * LN2_HI
+    }
+
+    /// Completes the pass's sums: adds the interior hit terms (see [`hit_curve_interior`]) at
+    /// the pass's `probe`. Call once, after the last [`PassStats::visit`].
+    pub fn finish(&mut self, probe: &Probe) {
+        if let Some(hp) = &probe.hit {
+            let [e, sq] = self.hit_interior;
+            // Σ e·(½ln τ − τd²/2), Σ e·(−d²/2 + 1/(2τ)), Σ e·(−2/(4τ²)): E[u²] = 1, E[u⁴] = 3.
+            self.hit_curve[0] += hp.half_ln_tau * e - 0.5 * hp.tau * sq;
+            self.hit_curve[1] += -0.5 * sq + hp.inv_2tau * e;
+            self.hit_curve[2] += -2.0 * hp.inv_4tau2 * e;
+        }
+        self.hit_interior = [0.0; 2];
+    }
+
     /// Folds one reading in: E-step at `th`, and the probe's Q terms if asked for.
+    ///
+    /// The E-step works on the component densities themselves (linear domain): one `exp` for
+    /// the hit density, one `exp` and one `expm1` for the short one (only where `z ≤ z*`), none
+    /// for max and rand, and no `ln` per reading: the reading's density is multiplied into a
+    /// running product kept as a mantissa in `[1, 2)` and a binary exponent (exact integer
+    /// bookkeeping, so it cannot under- or overflow), and [`PassStats::log_likelihood`] takes one
+    /// `ln` per pass. This needs the density total to be a normal number well inside the
+    /// range: a total outside `[LINEAR_MIN, LINEAR_MAX]` (or not finite) sends the reading to
+    /// the log-domain E-step instead (log-sum-exp, exactly as before), which never underflows.
+    /// Inside that range the two agree to f64 rounding: a component that underflows in the
+    /// linear domain (below 2⁻¹⁰²²) has a responsibility below 2⁻¹⁰²²/`LINEAR_MIN` < 2⁻¹²⁵ in
+    /// both, under the rounding of any responsibility sum it is added to.
     #[inline]
     pub fn visit(
         &mut self,
@@ -182,8 +260,9 @@ impl<const G: usize> PassStats<G> {
         range_m: f32,
         z_star_m: f32,
     ) {
-        let (Some(ln_w), Some(n), Some(e_acc)) = (
+        let (Some(ln_w), Some(lin_w), Some(n), Some(e_acc)) = (
             th.ln_w.get(group),
+            th.lin_w.get(group),
             self.n.get_mut(group),
             self.e.get_mut(group),
         ) else {
@@ -205,45 +284,73 @@ impl<const G: usize> PassStats<G> {
         };
         let d = z - s;
         let u = d * th.inv_sigma;
-        let l_hit = ln_w[0] + th.ln_peak - ln_hit_mass(s, th.zmax, th.inv_sigma) - 0.5 * u * u;
+        let half_u2 = 0.5 * u * u;
+        let mass = hit_mass(s, th.zmax, th.inv_sigma);
         let short_ok = s > 0.0 && z <= s;
         // The short normalizer at θ's λ, shared with the short probe when that is at the same λ
-        // (the E-step pass of the default update): one expm1 and one ln per reading, not two.
+        // (the E-step pass of the truncated updates).
         let short_norm = if short_ok {
             Some(ShortNorm::new(th.lambda, s))
         } else {
             None
         };
-        let l_short = match &short_norm {
-            Some(sn) => ln_w[1] + th.ln_lambda - th.lambda * z - sn.ln_one_minus,
-            None => f64::NEG_INFINITY,
-        };
-        let (l_max, l_rand) = if is_max {
-            (ln_w[2], f64::NEG_INFINITY)
+
+        // Linear domain: the four component densities (1/m; the max one a point mass).
+        let p_hit = if -half_u2 < EXP_IS_ZERO {
+            0.0
+        } else if mass == 1.0 {
+            // The common case (z* more than 8.5 σ from both ends): no division.
+            lin_w[0] * exp::exp(-half_u2)
         } else {
-            (f64::NEG_INFINITY, ln_w[3] + th.ln_inv_zmax)
+            lin_w[0] * exp::exp(-half_u2) / mass
         };
-        let l = [l_hit, l_short, l_max, l_rand];
-        let m = l.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
-        if m == f64::NEG_INFINITY || m.is_nan() {
-            self.unexplained += 1;
-            return;
-        }
-        let mut r = [0.0f64; 4];
-        for (ri, &li) in r.iter_mut().zip(&l) {
-            *ri = if li == m {
-                1.0
-            } else if li - m < EXP_IS_ZERO {
-                // exp would round to exactly 0 (this also covers li = −∞).
-                0.0
-            } else {
-                math::exp_f64(li - m)
+        let p_short = match &short_norm {
+            Some(sn) => lin_w[1] * exp::exp(-th.lambda * z) * sn.inv_one_minus(),
+            None => 0.0,
+        };
+        let (p_max, p_rand) = if is_max {
+            (lin_w[2], 0.0)
+        } else {
+            (0.0, lin_w[3])
+        };
+        let lin_total = p_hit + p_short + p_max + p_rand;
+        let (r, inv_total) = if (LINEAR_MIN..=LINEAR_MAX).contains(&lin_total) {
+            fold_density(&mut self.ll_mant, &mut self.ll_exp, lin_total);
+            ([p_hit, p_short, p_max, p_rand], 1.0 / lin_total)
+        } else {
+            // Log domain (log-sum-exp), for totals the linear form cannot carry.
+            let l_hit = ln_w[0] + th.ln_peak - ln_of_mass(mass) - half_u2;
+            let l_short = match &short_norm {
+                Some(sn) => ln_w[1] + th.ln_lambda - th.lambda * z - math::ln_f64(sn.one_minus()),
+                None => f64::NEG_INFINITY,
             };
-        }
-        let total: f64 = r.iter().sum();
-        self.ll += m + math::ln_f64(total);
+            let (l_max, l_rand) = if is_max {
+                (ln_w[2], f64::NEG_INFINITY)
+            } else {
+                (f64::NEG_INFINITY, ln_w[3] + th.ln_inv_zmax)
+            };
+            let l = [l_hit, l_short, l_max, l_rand];
+            let m = l.iter().fold(f64::NEG_INFINITY, |a, &b| a.max(b));
+            if m == f64::NEG_INFINITY || m.is_nan() {
+                self.unexplained += 1;
+                return;
+            }
+            let mut r = [0.0f64; 4];
+            for (ri, &li) in r.iter_mut().zip(&l) {
+                *ri = if li == m {
+                    1.0
+                } else if li - m < EXP_IS_ZERO {
+                    // exp would round to exactly 0 (this also covers li = −∞).
+                    0.0
+                } else {
+                    math::exp_f64(li - m)
+                };
+            }
+            let total: f64 = r.iter().sum();
+            self.ll += m + math::ln_f64(total);
+            (r, 1.0 / total)
+        };
         *n += 1;
-        let inv_total = 1.0 / total;
         for (acc, &ri) in e_acc.iter_mut().zip(&r) {
             *acc += ri * inv_total;
         }
@@ -253,9 +360,15 @@ impl<const G: usize> PassStats<G> {
         self.short_z += e_short * z;
         if let Some(hp) = &probe.hit {
             if e_hit > 0.0 {
-                let c = hit_curve(hp, d, s, th.zmax);
-                for (a, b) in self.hit_curve.iter_mut().zip(c) {
-                    *a += e_hit * b;
+                if hit_curve_interior(hp, s, th.zmax) {
+                    // ℓ is a + b·d² with a, b fixed by τ: two sums, folded in by `finish`.
+                    self.hit_interior[0] += e_hit;
+                    self.hit_interior[1] += e_hit * d * d;
+                } else {
+                    let c = hit_curve(hp, d, s, th.zmax);
+                    for (a, b) in self.hit_curve.iter_mut().zip(c) {
+                        *a += e_hit * b;
+                    }
                 }
             }
         }
@@ -265,13 +378,25 @@ impl<const G: usize> PassStats<G> {
                     Some(sn) if sp.lambda == th.lambda => sn,
                     _ => ShortNorm::new(sp.lambda, s),
                 };
-                let c = short_curve(sp, z, s, &norm);
+                let c = short_curve(sp, z, s, &norm, probe.short_value);
                 for (a, b) in self.short_curve.iter_mut().zip(c) {
                     *a += e_short * b;
                 }
             }
         }
     }
+}
+
+/// Multiplies a reading's density `p ∈ [LINEAR_MIN, LINEAR_MAX]` into the running product
+/// `mant·2^exp`. The mantissa stays in `[1, 2)`, so `mant·p` is a normal f64
+/// (`2⁻⁸⁹⁷ ≤ · < 2⁸⁹⁸`) and splitting off its exponent is exact.
+#[inline]
+fn fold_density(mant: &mut f64, exp: &mut i64, p: f64) {
+    let bits = (*mant * p).to_bits();
+    // Biased exponent field (11 bits); the product is normal, so it is in 1..=2046.
+    let biased = ((bits >> 52) & 0x7ff) as i64;
+    *exp += biased - 1023;
+    *mant = f64::from_bits((bits & MANTISSA_BITS) | ONE_BITS);
 }
 
 /// `½·erf(x/√2)` for `x ≥ 0`: the standard normal mass between 0 and `x`.
@@ -285,11 +410,16 @@ fn half_mass(x: f64) -> f64 {
     }
 }
 
-/// `ln(Φ((z_max − z*)/σ) − Φ(−z*/σ))`, the log of `1/η_hit`. 0 (exactly) when both ends are
-/// more than 8.5 σ away.
+/// `Φ((z_max − z*)/σ) − Φ(−z*/σ)`, the hit component's mass on `[0, z_max]`, `1/η_hit`.
+/// Exactly 1.0 (no `erf` call) when both ends are more than `ERF_IS_ONE·√2 ≈ 8.5` σ away.
 #[inline]
-fn ln_hit_mass(s: f64, zmax: f64, inv_sigma: f64) -> f64 {
-    let mass = half_mass((zmax - s) * inv_sigma) + half_mass(s * inv_sigma);
+fn hit_mass(s: f64, zmax: f64, inv_sigma: f64) -> f64 {
+    half_mass((zmax - s) * inv_sigma) + half_mass(s * inv_sigma)
+}
+
+/// `ln(mass)`, 0 (exactly, no call) for a mass of 1.
+#[inline]
+fn ln_of_mass(mass: f64) -> f64 {
     if mass == 1.0 {
         0.0
     } else {
@@ -304,8 +434,20 @@ fn phi_terms(x: f64) -> (f64, f64) {
     if x * x > 100.0 {
         return (0.0, 0.0);
     }
-    let p = INV_SQRT_2PI_F64 * math::exp_f64(-0.5 * x * x);
+    let p = INV_SQRT_2PI_F64 * exp::exp(-0.5 * x * x);
     (x * p, x * x * x * p)
+}
+
+/// Whether a reading's hit term at the probe τ is untruncated to f64 precision: both ends
+/// `α = −z*·√τ`, `β = (z_max − z*)·√τ` beyond 10 in magnitude. Then [`hit_curve`] takes its
+/// first branch exactly (`x² > 100` zeroes both density terms, and `|x|/√2 > 7.07 > ERF_IS_ONE`
+/// makes the mass exactly 1), so its value is `(½ln τ − τd²/2, −d²/2 + 1/(2τ), −2/(4τ²))`,
+/// linear in `1` and `d²`: the pass sums `e_hit` and `e_hit·d²` instead (no `erf`, no `exp`).
+#[inline]
+fn hit_curve_interior(hp: &HitProbe, s: f64, zmax: f64) -> bool {
+    let alpha = -s * hp.sqrt_tau;
+    let beta = (zmax - s) * hp.sqrt_tau;
+    alpha * alpha > 100.0 && beta * beta > 100.0
 }
 
 /// One reading's hit term of Q as a function of the precision `τ = 1/σ²` (the constant
@@ -350,40 +492,127 @@ fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64) -> Curve {
 ///
 /// (concave: with `x = λz*`, `x²e^x/(e^x − 1)² = ((x/2)/sinh(x/2))² ≤ 1`).
 ///
-/// `norm` is [`ShortNorm`] at `(sp.lambda, s)`.
+/// `norm` is [`ShortNorm`] at `(sp.lambda, s)`. Without `value` the first entry is 0 (and no
+/// `ln` is taken).
 #[inline]
-fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm) -> Curve {
+fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm, value: bool) -> Curve {
     let lambda = sp.lambda;
-    let q = sp.ln_lambda - lambda * z - norm.ln_one_minus;
-    let g = sp.inv_lambda - z - s / norm.em1;
-    let h = -sp.inv_lambda2 + s * s / (norm.em1 * norm.one_minus);
+    let q = if value {
+        sp.ln_lambda - lambda * z - math::ln_f64(norm.one_minus())
+    } else {
+        0.0
+    };
+    // z*/(e^x − 1) and z*²·e^x/(e^x − 1)² = z*²·(1/(e^x − 1))·(1 + 1/(e^x − 1)).
+    let g = sp.inv_lambda - z - s * norm.inv_em1;
+    let h = -sp.inv_lambda2 + s * s * norm.inv_em1 * norm.inv_one_minus();
     [q, g, h]
 }
 
-/// The truncation normalizer of the short component at rate λ and wall `z* > 0`:
-/// `1 − e^{−λz*}`, formed as `(e^x − 1)/(e^x − 1 + 1)` with `x = λz*` (one `expm1`, no
-/// cancellation; `1` once `e^x` overflows), its logarithm, and `e^x − 1` itself (which the
-/// λ-derivatives of [`short_curve`] need).
+/// The truncation normalizer of the short component at rate λ and wall `z* > 0`,
+/// `1 − e^{−λz*}`, through `e^x − 1` with `x = λz*` (no cancellation) and its reciprocal: one
+/// `e^x − 1` and one division per reading. `1/(1 − e^{−x}) = 1 + 1/(e^x − 1)`; once `e^x`
+/// overflows the reciprocal is 0 and the normalizer 1.
 #[derive(Clone, Copy, Debug)]
 struct ShortNorm {
     em1: f64,
-    one_minus: f64,
-    ln_one_minus: f64,
+    inv_em1: f64,
 }
 
 impl ShortNorm {
     #[inline]
     fn new(lambda: f64, s: f64) -> Self {
-        let em1 = math::expm1_f64(lambda * s);
-        let one_minus = if em1.is_finite() {
-            em1 / (em1 + 1.0)
-        } else {
-            1.0
-        };
+        let em1 = exp::expm1_nonneg(lambda * s);
         Self {
             em1,
-            one_minus,
-            ln_one_minus: math::ln_f64(one_minus),
+            inv_em1: 1.0 / em1,
         }
+    }
+
+    /// `1/(1 − e^{−x})`.
+    #[inline]
+    fn inv_one_minus(&self) -> f64 {
+        1.0 + self.inv_em1
+    }
+
+    /// `1 − e^{−x}`, as `(e^x − 1)/(e^x − 1 + 1)`.
+    #[inline]
+    fn one_minus(&self) -> f64 {
+        if self.em1.is_finite() {
+            self.em1 / (self.em1 + 1.0)
+        } else {
+            1.0
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The skipped `erf` of [`half_mass`] is the full formula bit for bit: `erfc(6) ≈ 2.2e-17`
+    /// is under half an ulp of 1 (2⁻⁵⁴ ≈ 5.6e-17), so `erf(y)` rounds to exactly 1.0 from
+    /// `y = 6` on (erf is increasing), and `0.5·1.0 = 0.5`.
+    #[test]
+    fn skipped_erf_is_exact_at_and_beyond_the_threshold() {
+        let mut y = ERF_IS_ONE;
+        while y < 40.0 {
+            assert_eq!(math::erf_f64(y).to_bits(), 1.0f64.to_bits(), "erf({y})");
+            y = y * 1.001 + 1e-3;
+        }
+        for y in [
+            ERF_IS_ONE,
+            f64::from_bits(ERF_IS_ONE.to_bits() + 1),
+            1e3,
+            1e300,
+        ] {
+            assert_eq!(math::erf_f64(y).to_bits(), 1.0f64.to_bits(), "erf({y})");
+        }
+        // half_mass with the skip against the formula, across the threshold x = 6·√2.
+        for i in 0..20_000 {
+            let x = 8.0 + f64::from(i) * 1e-4;
+            assert_eq!(
+                half_mass(x).to_bits(),
+                (0.5 * math::erf_f64(x * FRAC_1_SQRT_2_F64)).to_bits(),
+                "{x}"
+            );
+        }
+        // And the hit mass is exactly 1 once both ends are past the threshold.
+        assert_eq!(hit_mass(5.0, 30.0, 1.0 / 0.15).to_bits(), 1.0f64.to_bits());
+        assert!(hit_mass(1.0, 30.0, 1.0 / 0.15) < 1.0);
+    }
+
+    /// Where [`hit_curve_interior`] holds, [`hit_curve`] is exactly the closed form that
+    /// [`PassStats::finish`] sums (so the interior shortcut only reassociates the sum).
+    #[test]
+    fn interior_hit_curve_is_the_closed_form() {
+        let zmax = 30.0;
+        let mut interior = 0;
+        for sigma in [0.01, 0.15, 1.0, 3.0] {
+            let probe = Probe::new(Some(1.0 / (sigma * sigma)), None);
+            let hp = probe.hit.unwrap();
+            for i in 0..=3_000 {
+                let s = zmax * f64::from(i) / 3_000.0;
+                let d = 0.37 * sigma - 0.001 * f64::from(i % 7);
+                let full = hit_curve(&hp, d, s, zmax);
+                if hit_curve_interior(&hp, s, zmax) {
+                    interior += 1;
+                    let closed = [
+                        hp.half_ln_tau - 0.5 * hp.tau * d * d,
+                        -0.5 * d * d + hp.inv_2tau,
+                        -2.0 * hp.inv_4tau2,
+                    ];
+                    for (a, b) in full.iter().zip(closed) {
+                        assert_eq!(a.to_bits(), b.to_bits(), "σ {sigma} z* {s}");
+                    }
+                } else {
+                    // Near an end the truncation terms matter: not the closed form.
+                    assert!(
+                        s * s / (sigma * sigma) <= 100.0 + 1e-9
+                            || (zmax - s) * (zmax - s) / (sigma * sigma) <= 100.0 + 1e-9
+                    );
+                }
+            }
+        }
+        assert!(interior > 5_000, "{interior}");
     }
 }
