@@ -39,7 +39,7 @@
 //! the `u32` cell index cannot wrap back onto the map). A pose outside it (far off the map,
 //! NaN) is scored by a per-beam `f32` path with the same result semantics.
 
-use super::likelihood::LikelihoodField;
+use super::likelihood::{LikelihoodField, LIKELIHOOD_TABLE_LEN};
 use crate::math;
 use crate::model::Stride;
 use crate::pose::Pose;
@@ -195,12 +195,11 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
             let trig = pow2(TRIG_BITS) as f32;
             let (c, s) = (round_to_i32(cos_t * trig), round_to_i32(sin_t * trig));
             let f = self.frac_bits;
-            // The usual case with a constant shift (frees a register in the loop); the same
-            // code otherwise.
+            // The usual case with a constant shift; the same code otherwise.
             sum = if f == MAX_FRAC_BITS {
-                self.fixed_loop(ax, ay, c, s, MAX_FRAC_BITS, &mut each)
+                self.fixed_path::<F, true>(ax, ay, c, s, f, &mut each)
             } else {
-                self.fixed_loop(ax, ay, c, s, f, &mut each)
+                self.fixed_path::<F, false>(ax, ay, c, s, f, &mut each)
             };
         } else {
             let inv_scale = pow2(-(self.frac_bits as i32) - 2) as f32;
@@ -219,48 +218,52 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
         }
     }
 
-    /// The per-beam loop of the fixed-point path: `(ax, ay)` the robot's grid position,
-    /// `(c, s)` its heading's cosine and sine in Q2.30, `f` the fractional bits.
+    /// The fixed-point path: `(ax, ay)` the robot's grid position, `(c, s)` its heading's
+    /// cosine and sine in Q2.30, `f` the fractional bits (`FIX16`: `f` is 16, known at
+    /// compile time, which frees a register in the loop).
+    ///
+    /// The per-beam loop ([`on_map_run`]) has no call in it: it stops at the first endpoint
+    /// off the map and returns the endpoints from there on; that beam is charged here
+    /// ([`off_map`]) and the loop resumes after it. Terms are added in bearing order either way.
     #[inline(always)]
-    fn fixed_loop<F: FnMut(usize, f32)>(
+    fn fixed_path<E: FnMut(usize, f32), const FIX16: bool>(
         &self,
         ax: f32,
         ay: f32,
         c: i32,
         s: i32,
         f: u32,
-        each: &mut F,
+        each: &mut E,
     ) -> f32 {
         let view = self.field.view();
-        let table = self.field.table();
         let step = view.step_m();
         let scale = pow2(f as i32) as f32;
-        let (axq, ayq) = (round_to_i32(ax * scale), round_to_i32(ay * scale));
-        let w = view.width();
-        let codes = view.codes();
+        let k = FixedPose {
+            codes: view.codes(),
+            table: self.field.table(),
+            w: view.width(),
+            ax: round_to_i32(ax * scale),
+            ay: round_to_i32(ay * scale),
+            c,
+            s,
+        };
+        let points: &[[i32; 2]] = &self.points;
+        let n = points.len();
         let mut sum = 0.0f32;
-        for (j, p) in self.points.iter().enumerate() {
-            let (x, y) = (p[0], p[1]);
-            // Grid coordinates with f fractional bits; the limits keep these sums in range.
-            let gx = mul_hi_sub(mul_hi_add(axq, c, x), s, y);
-            let gy = mul_hi_add(mul_hi_add(ayq, s, x), c, y);
-            // Arithmetic shift: floor, so a point just left of or below the map gets −1.
-            let ix = gx.wrapping_shr(f) as u32;
-            let iy = gy.wrapping_shr(f) as u32;
-            // Row-major index in u32 arithmetic: rows off the map (either side) land past the
-            // payload's end, as the y limits guarantee; columns are checked here.
-            let i = iy.wrapping_mul(w).wrapping_add(ix) as usize;
-            let (term, code) = match codes.get(i) {
-                // A code is ≤ 255 and the table has 256 entries: the check folds away.
-                Some(&code) if ix < w => {
-                    (table.get(usize::from(code)).copied().unwrap_or(0.0), code)
-                }
-                _ => off_map(self.field, gx, gy, f),
+        let mut rest = points;
+        loop {
+            let (partial, stop) =
+                on_map_run::<E, FIX16>(&k, rest, n - rest.len(), sum, f, step, each);
+            sum = partial;
+            let Some((p, tail)) = stop.split_first() else {
+                return sum;
             };
+            let (gx, gy) = k.grid(p);
+            let (term, code) = off_map(self.field, gx, gy, f);
             sum += term;
-            each(j, f32::from(code) * step);
+            each(n - stop.len(), f32::from(code) * step);
+            rest = tail;
         }
-        sum
     }
 
     /// Whether [`PreparedScan::score`] at `pose` takes the fixed-point path (true for every
@@ -310,6 +313,92 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
     pub fn endpoints(&self) -> &[[i32; 2]] {
         &self.points
     }
+}
+
+/// What the fixed-point loop reads at one pose.
+struct FixedPose<'a> {
+    /// The map's distance codes, row-major.
+    codes: &'a [u8],
+    /// The per-code log-likelihood terms.
+    table: &'a [f32; LIKELIHOOD_TABLE_LEN],
+    /// The map's width, cells.
+    w: u32,
+    /// The robot's grid position, cells, with `f` fractional bits.
+    ax: i32,
+    ay: i32,
+    /// Cosine and sine of the robot's heading, Q2.30.
+    c: i32,
+    s: i32,
+}
+
+impl FixedPose<'_> {
+    /// The grid point (cells, `f` fractional bits) of a robot-frame endpoint (`f + 2`
+    /// fractional bits): rotation and translation as four "multiply, keep the high word, add
+    /// or subtract" operations. The limits of the fast path keep these sums in range.
+    #[inline(always)]
+    fn grid(&self, p: &[i32; 2]) -> (i32, i32) {
+        let (x, y) = (p[0], p[1]);
+        let gx = mul_hi_sub(mul_hi_add(self.ax, self.c, x), self.s, y);
+        let gy = mul_hi_add(mul_hi_add(self.ay, self.s, x), self.c, y);
+        (gx, gy)
+    }
+
+    /// The distance code of the cell under endpoint `p`, or `None` when it is off the map
+    /// (`shift` = `f`).
+    #[inline(always)]
+    fn code(&self, p: &[i32; 2], shift: u32) -> Option<u8> {
+        let (gx, gy) = self.grid(p);
+        // Arithmetic shift: floor, so a point just left of or below the map gets −1.
+        let ix = gx.wrapping_shr(shift) as u32;
+        let iy = gy.wrapping_shr(shift) as u32;
+        // Row-major index in u32 arithmetic: rows off the map (either side) land past the
+        // payload's end, as the y limits guarantee; columns are checked here.
+        let i = iy.wrapping_mul(self.w).wrapping_add(ix) as usize;
+        if ix < self.w {
+            self.codes.get(i).copied()
+        } else {
+            None
+        }
+    }
+
+    /// The table's term for `code` (a code is ≤ 255 and the table has 256 entries: the check
+    /// folds away).
+    #[inline(always)]
+    fn term(&self, code: u8) -> f32 {
+        self.table.get(usize::from(code)).copied().unwrap_or(0.0)
+    }
+}
+
+/// Adds the terms of `points` to `sum`, in order, up to the first endpoint off the map;
+/// returns the sum and the endpoints from that one on (empty when every one was on the map).
+/// `each` gets `(first + j, distance)` for the `j`-th endpoint of `points`.
+///
+/// No call inside, so everything stays in registers; not inlined, so its register allocation
+/// is its own. The position of an endpoint is found from its address when needed (on exit, or
+/// for a non-trivial `each`), so the loop keeps no counter.
+#[inline(never)]
+fn on_map_run<'p, E: FnMut(usize, f32), const FIX16: bool>(
+    k: &FixedPose<'_>,
+    points: &'p [[i32; 2]],
+    first: usize,
+    mut sum: f32,
+    f: u32,
+    step: f32,
+    each: &mut E,
+) -> (f32, &'p [[i32; 2]]) {
+    let shift = if FIX16 { MAX_FRAC_BITS } else { f };
+    let at = |p: &[i32; 2]| {
+        (p as *const [i32; 2] as usize - points.as_ptr() as usize)
+            / core::mem::size_of::<[i32; 2]>()
+    };
+    for p in points {
+        let Some(code) = k.code(p, shift) else {
+            return (sum, points.get(at(p)..).unwrap_or_default());
+        };
+        sum += k.term(code);
+        each(first + at(p), f32::from(code) * step);
+    }
+    (sum, &[])
 }
 
 /// The term and table index of a fixed-point grid point the fast path found off the map:
