@@ -58,16 +58,60 @@ impl core::fmt::Display for RayCastError {
 
 impl core::error::Error for RayCastError {}
 
+/// Counts of the work one cast did, for profiling where the time goes
+/// ([`RayCaster::cast_dir_traced`]). The plain casts count nothing and cost nothing for it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CastTrace {
+    /// Sphere-tracing jumps: each one skips `safe` cells and restarts the traversal.
+    pub jumps: u32,
+    /// Cell-to-cell steps of the grid traversal (cells visited one by one).
+    pub steps: u32,
+}
+
+/// What the traversal reports as it goes; a no-op for the plain casts.
+trait Probe {
+    fn jump(&mut self);
+    fn step(&mut self);
+}
+
+/// Counts nothing.
+struct NoProbe;
+
+impl Probe for NoProbe {
+    #[inline(always)]
+    fn jump(&mut self) {}
+    #[inline(always)]
+    fn step(&mut self) {}
+}
+
+impl Probe for CastTrace {
+    #[inline(always)]
+    fn jump(&mut self) {
+        self.jumps = self.jumps.saturating_add(1);
+    }
+    #[inline(always)]
+    fn step(&mut self) {
+        self.steps = self.steps.saturating_add(1);
+    }
+}
+
 /// A ray caster over one blob: the per-blob constants, computed once.
 #[derive(Clone, Copy, Debug)]
 pub struct RayCaster<'a> {
     view: FieldView<'a>,
+    /// The payload, row-major (row 0 = lowest y), `stride` codes per row.
+    codes: &'a [u8],
+    stride: usize,
+    last_ix: u32,
+    last_iy: u32,
     width_f: f32,
     height_f: f32,
     /// Code step in cell units.
     step_cells: f32,
     /// `step/2 + √2` in cell units: subtracted from a stored distance to get a safe jump.
     jump_margin_cells: f32,
+    /// The smallest code whose safe jump exceeds [`JUMP_MIN_CELLS`] (256: none does).
+    jump_code: u16,
 }
 
 impl<'a> RayCaster<'a> {
@@ -82,12 +126,23 @@ impl<'a> RayCaster<'a> {
             return Err(RayCastError::StepTooCoarse);
         }
         let step_cells = step / cell;
+        let jump_margin_cells = 0.5 * step_cells + core::f32::consts::SQRT_2;
+        // The same comparison the traversal made per cell before it was tabulated here: a code
+        // jumps iff `code·step − margin > JUMP_MIN_CELLS` (monotone in the code).
+        let jump_code = (0..=u8::MAX)
+            .find(|&c| f32::from(c) * step_cells - jump_margin_cells > JUMP_MIN_CELLS)
+            .map_or(256, u16::from);
         Ok(Self {
             view,
+            codes: view.codes(),
+            stride: view.width() as usize,
+            last_ix: view.width().saturating_sub(1),
+            last_iy: view.height().saturating_sub(1),
             width_f: view.width() as f32,
             height_f: view.height() as f32,
             step_cells,
-            jump_margin_cells: 0.5 * step_cells + core::f32::consts::SQRT_2,
+            jump_margin_cells,
+            jump_code,
         })
     }
 
@@ -106,9 +161,36 @@ impl<'a> RayCaster<'a> {
 
     /// As [`RayCaster::cast`], with the direction given as a unit vector `(ux, uy)`.
     pub fn cast_dir(&self, x_m: f32, y_m: f32, ux: f32, uy: f32, max_range_m: f32) -> f32 {
+        self.cast_dir_probed(x_m, y_m, ux, uy, max_range_m, &mut NoProbe)
+    }
+
+    /// As [`RayCaster::cast_dir`] (same result, bit for bit), also adding the jumps and cell
+    /// steps the cast took to `trace`.
+    pub fn cast_dir_traced(
+        &self,
+        x_m: f32,
+        y_m: f32,
+        ux: f32,
+        uy: f32,
+        max_range_m: f32,
+        trace: &mut CastTrace,
+    ) -> f32 {
+        self.cast_dir_probed(x_m, y_m, ux, uy, max_range_m, trace)
+    }
+
+    #[inline(always)]
+    fn cast_dir_probed<P: Probe>(
+        &self,
+        x_m: f32,
+        y_m: f32,
+        ux: f32,
+        uy: f32,
+        max_range_m: f32,
+        probe: &mut P,
+    ) -> f32 {
         let (ox, oy) = self.view.to_grid(x_m, y_m);
         let range_cells = max_range_m * self.view.inv_cell_size();
-        match self.cast_grid(ox, oy, ux, uy, range_cells) {
+        match self.cast_grid(ox, oy, ux, uy, range_cells, probe) {
             Some(t) => (t * self.view.cell_size_m()).min(max_range_m),
             None => max_range_m,
         }
@@ -116,7 +198,16 @@ impl<'a> RayCaster<'a> {
 
     /// The traversal in grid units: the entry distance (cells) of the first occupied cell, or
     /// `None`.
-    fn cast_grid(&self, ox: f32, oy: f32, ux: f32, uy: f32, range_cells: f32) -> Option<f32> {
+    #[inline(always)]
+    fn cast_grid<P: Probe>(
+        &self,
+        ox: f32,
+        oy: f32,
+        ux: f32,
+        uy: f32,
+        range_cells: f32,
+        probe: &mut P,
+    ) -> Option<f32> {
         // `max`/`min` below drop NaNs, so non-finite input is turned away here.
         if !(ox.is_finite() && oy.is_finite() && ux.is_finite() && uy.is_finite()) {
             return None;
@@ -133,80 +224,95 @@ impl<'a> RayCaster<'a> {
         if t_in >= t_end {
             return None;
         }
-        let last_ix = self.view.width().saturating_sub(1);
-        let last_iy = self.view.height().saturating_sub(1);
-        let step_x: i64 = if ux > 0.0 { 1 } else { -1 };
-        let step_y: i64 = if uy > 0.0 { 1 } else { -1 };
-        // The time of the next x (y) boundary from cell `ix` (`iy`).
-        let next_x = |ix: i64| {
-            if ux == 0.0 {
-                f32::INFINITY
-            } else {
-                let b = if ux > 0.0 { ix + 1 } else { ix };
-                (b as f32 - ox) * inv_x
-            }
+        // An axis whose `1/u` is infinite (a zero or subnormal component) never steps: its
+        // boundary times stay at +∞. Otherwise `(b − o)·inv` is finite or ±∞, never NaN.
+        let live_x = inv_x.is_finite();
+        let live_y = inv_y.is_finite();
+        let pos_x = ux > 0.0;
+        let pos_y = uy > 0.0;
+        // Per step along x (y): the boundary coordinate moves by `dbx` (`dby`) and the index by
+        // `dix` (`diy`); from cell `i` the next boundary is `i + 1` going up, `i` going down.
+        let (dbx, bx_off, dix) = if pos_x {
+            (1.0f32, 1.0f32, 1isize)
+        } else {
+            (-1.0, 0.0, -1)
         };
-        let next_y = |iy: i64| {
-            if uy == 0.0 {
-                f32::INFINITY
-            } else {
-                let b = if uy > 0.0 { iy + 1 } else { iy };
-                (b as f32 - oy) * inv_y
-            }
+        let stride = self.stride as isize;
+        let (dby, by_off, diy) = if pos_y {
+            (1.0f32, 1.0f32, stride)
+        } else {
+            (-1.0, 0.0, -stride)
         };
         // `t` is where the ray enters the current cell (or starts, or lands after a jump).
         let mut t = t_in;
-        'restart: loop {
+        loop {
             // (Re)start the traversal at `t`: the cell holding the point, clamped into the map
-            // (the point is on the rectangle up to rounding).
+            // (the point is on the rectangle up to rounding). `as u32` saturates, so a point a
+            // rounding error below 0 reads cell 0, and for `p ≥ 0` truncation is `floor`.
             let px = ox + t * ux;
             let py = oy + t * uy;
-            let mut ix = i64::from((math::floor(px).max(0.0) as u32).min(last_ix));
-            let mut iy = i64::from((math::floor(py).max(0.0) as u32).min(last_iy));
-            let mut t_x = next_x(ix);
-            let mut t_y = next_y(iy);
+            let ix = (px as u32).min(self.last_ix);
+            let iy = (py as u32).min(self.last_iy);
+            // Steps left along each axis before the traversal would leave the map.
+            let mut left_x = if pos_x { self.last_ix - ix } else { ix };
+            let mut left_y = if pos_y { self.last_iy - iy } else { iy };
+            let mut idx = (iy as usize)
+                .wrapping_mul(self.stride)
+                .wrapping_add(ix as usize);
+            let mut bx = ix as f32 + bx_off;
+            let mut by = iy as f32 + by_off;
+            let mut t_x = if live_x {
+                (bx - ox) * inv_x
+            } else {
+                f32::INFINITY
+            };
+            let mut t_y = if live_y {
+                (by - oy) * inv_y
+            } else {
+                f32::INFINITY
+            };
             loop {
-                let code = self.code(ix, iy)?;
-                if code == 0 {
-                    return Some(t);
-                }
-                let safe = f32::from(code) * self.step_cells - self.jump_margin_cells;
-                if safe > JUMP_MIN_CELLS {
-                    t += safe;
+                let code = *self.codes.get(idx)?;
+                if u16::from(code) >= self.jump_code {
+                    probe.jump();
+                    t += f32::from(code) * self.step_cells - self.jump_margin_cells;
                     if t >= t_end {
                         return None;
                     }
-                    continue 'restart;
+                    break;
                 }
+                if code == 0 {
+                    return Some(t);
+                }
+                probe.step();
                 if t_x < t_y {
+                    left_x = left_x.checked_sub(1)?;
                     t = t_x;
-                    t_x = next_x(ix + step_x);
-                    ix += step_x;
+                    bx += dbx;
+                    t_x = (bx - ox) * inv_x;
+                    idx = idx.wrapping_add_signed(dix);
                 } else if t_y < t_x {
+                    left_y = left_y.checked_sub(1)?;
                     t = t_y;
-                    t_y = next_y(iy + step_y);
-                    iy += step_y;
+                    by += dby;
+                    t_y = (by - oy) * inv_y;
+                    idx = idx.wrapping_add_signed(diy);
                 } else {
                     // Exactly through a corner: a diagonal step, like the host reference.
+                    left_x = left_x.checked_sub(1)?;
+                    left_y = left_y.checked_sub(1)?;
                     t = t_x;
-                    t_x = next_x(ix + step_x);
-                    t_y = next_y(iy + step_y);
-                    ix += step_x;
-                    iy += step_y;
+                    bx += dbx;
+                    by += dby;
+                    t_x = (bx - ox) * inv_x;
+                    t_y = (by - oy) * inv_y;
+                    idx = idx.wrapping_add_signed(dix).wrapping_add_signed(diy);
                 }
                 if t >= t_end {
                     return None;
                 }
             }
         }
-    }
-
-    /// The code of cell `(ix, iy)`; `None` off the map.
-    #[inline(always)]
-    fn code(&self, ix: i64, iy: i64) -> Option<u8> {
-        let ix = u32::try_from(ix).ok()?;
-        let iy = u32::try_from(iy).ok()?;
-        self.view.code(ix, iy)
     }
 }
 

@@ -38,6 +38,8 @@ fn race(c: &mut Criterion) {
         scans.len()
     );
 
+    cast_work_histogram(&beam, &data);
+
     let mut g = c.benchmark_group("race_intel");
     g.throughput(Throughput::Elements(scans.len() as u64));
     g.bench_function("baseline_sum_ranges", |b| {
@@ -92,6 +94,56 @@ fn race(c: &mut Criterion) {
         })
     });
     g.finish();
+}
+
+/// Where the ray casting's time goes: per cast (the bench's 16,380), the sphere-tracing jumps
+/// and the cell-by-cell steps of the grid traversal, as histograms, split by whether the
+/// reading is a max-range one.
+fn cast_work_histogram(beam: &beamfield::BeamFieldModel<'_>, data: &intel_race::RaceData) {
+    let mut z_star = [0.0f32; N];
+    let mut all: Vec<(beamfield::CastTrace, bool)> = Vec::new();
+    for (_, scan, pose) in &data.scans {
+        let mut traces = [beamfield::CastTrace::default(); N];
+        beam.cast_layout_traced(&data.layout, pose, &mut z_star, &mut traces);
+        for (t, &z) in traces.iter().zip(scan.ranges_m()) {
+            all.push((*t, !(z < data.max_range_m)));
+        }
+    }
+    let edges = [0u32, 1, 2, 4, 8, 16, 32, 64, 128, 256, 512, u32::MAX];
+    let hist = |f: &dyn Fn(&beamfield::CastTrace) -> u32, max_only: Option<bool>| {
+        let mut counts = vec![0usize; edges.len() - 1];
+        let (mut n, mut sum) = (0usize, 0u64);
+        for (t, is_max) in &all {
+            if max_only.is_some_and(|m| m != *is_max) {
+                continue;
+            }
+            let v = f(t);
+            n += 1;
+            sum += u64::from(v);
+            if let Some(b) = edges.windows(2).position(|w| v >= w[0] && v < w[1]) {
+                counts[b] += 1;
+            }
+        }
+        let bins: Vec<String> = edges
+            .windows(2)
+            .zip(&counts)
+            .map(|(w, c)| {
+                let hi = if w[1] == u32::MAX { "inf".to_string() } else { w[1].to_string() };
+                format!("[{},{}):{}", w[0], hi, c)
+            })
+            .collect();
+        format!(
+            "n {n}, mean {:.2}; {}",
+            sum as f64 / n.max(1) as f64,
+            bins.join(" ")
+        )
+    };
+    let steps = |t: &beamfield::CastTrace| t.steps;
+    let jumps = |t: &beamfield::CastTrace| t.jumps;
+    for (label, sel) in [("all", None), ("non-max", Some(false)), ("max-range", Some(true))] {
+        eprintln!("race: cast steps per cast ({label}): {}", hist(&steps, sel));
+        eprintln!("race: cast jumps per cast ({label}): {}", hist(&jumps, sel));
+    }
 }
 
 criterion_group!(benches, race);
