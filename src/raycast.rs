@@ -129,9 +129,6 @@ impl<'a> RayCaster<'a> {
         let jump_margin_cells = 0.5 * step_cells + core::f32::consts::SQRT_2;
         // The same comparison the traversal made per cell before it was tabulated here: a code
         // jumps iff `code·step − margin > JUMP_MIN_CELLS` (monotone in the code).
-        let jump_code = (0..=u8::MAX)
-            .find(|&c| f32::from(c) * step_cells - jump_margin_cells > JUMP_MIN_CELLS)
-            .map_or(256, u16::from);
         Ok(Self {
             view,
             codes: view.codes(),
@@ -142,8 +139,19 @@ impl<'a> RayCaster<'a> {
             height_f: view.height() as f32,
             step_cells,
             jump_margin_cells,
-            jump_code,
-        })
+            jump_code: jump_code(step_cells, jump_margin_cells, JUMP_MIN_CELLS),
+        }
+        .with_min_jump_cells(JUMP_MIN_CELLS))
+    }
+
+    /// The same caster, jumping only where the safe jump exceeds `cells` (cell lengths;
+    /// default [`JUMP_MIN_CELLS`]). A tuning knob for speed only: every jump is safe, so any
+    /// value casts to the same first occupied cell (the entry distance may differ by f32
+    /// rounding, as the traversal restarts at other points). NaN or negative reads as 0.
+    pub fn with_min_jump_cells(mut self, cells: f32) -> Self {
+        let cells = if cells >= 0.0 { cells } else { 0.0 };
+        self.jump_code = jump_code(self.step_cells, self.jump_margin_cells, cells);
+        self
     }
 
     /// The blob this caster reads.
@@ -316,6 +324,15 @@ impl<'a> RayCaster<'a> {
     }
 }
 
+/// The smallest code whose safe jump `code·step − margin` (cells) exceeds `min_cells`, or 256
+/// when none does: the traversal's per-cell test `safe > min_cells`, tabulated (monotone in
+/// the code).
+fn jump_code(step_cells: f32, margin_cells: f32, min_cells: f32) -> u16 {
+    (0..=u8::MAX)
+        .find(|&c| f32::from(c) * step_cells - margin_cells > min_cells)
+        .map_or(256, u16::from)
+}
+
 /// Entry and exit times of a ray `o + t·u` through the slab `[0, size]` along one axis, with
 /// `inv = 1/u` (`±∞` for `u = 0`: the whole line, or nothing, depending on `o`).
 #[inline(always)]
@@ -389,10 +406,17 @@ mod tests {
             // Range limit shorter than the wall.
             (x, y, 0.0, 0.3),
         ];
-        for (i, (x, y, a, want)) in cases.into_iter().enumerate() {
-            let limit = if i == 8 { 0.3 } else { 5.0 };
-            let got = rc.cast(x, y, a, limit);
-            assert!((got - want).abs() < 1e-5, "case {i}: {got} vs {want}");
+        // Any jump threshold gives the same answers (every jump is safe); NaN reads as 0.
+        for min_jump in [JUMP_MIN_CELLS, 0.0, 0.5, 8.0, f32::NAN, -1.0] {
+            let rc = rc.with_min_jump_cells(min_jump);
+            for (i, (x, y, a, want)) in cases.into_iter().enumerate() {
+                let limit = if i == 8 { 0.3 } else { 5.0 };
+                let got = rc.cast(x, y, a, limit);
+                assert!(
+                    (got - want).abs() < 1e-5,
+                    "min jump {min_jump}, case {i}: {got} vs {want}"
+                );
+            }
         }
         assert_eq!(rc.cast(f32::NAN, 0.0, 0.0, 5.0), 5.0);
         assert_eq!(rc.cast(0.0, 0.0, f32::NAN, 5.0), 5.0);
