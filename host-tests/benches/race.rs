@@ -148,7 +148,7 @@ fn cast_work_histogram(beam: &beamfield::BeamFieldModel<'_>, data: &intel_race::
         let mut traces = [beamfield::CastTrace::default(); N];
         beam.cast_layout_traced(&data.layout, pose, &mut z_star, &mut traces);
         for (t, &z) in traces.iter().zip(scan.ranges_m()) {
-            all.push((*t, !(z < data.max_range_m)));
+            all.push((*t, z >= data.max_range_m));
         }
     }
     let edges = [0u32, 1, 2, 4, 8, 16, 32, 64, 128, 256, 512, u32::MAX];
