@@ -40,7 +40,7 @@ pub use landmark::{
 };
 pub use model::{SensorModel, Stride};
 pub use pose::{wrap_angle, Pose, SensorMount};
-pub use raycast::{RayCastError, RayCaster};
+pub use raycast::{CastTrace, RayCastError, RayCaster};
 pub use scan::{Beam, BeamLayout, Reading, Scan, ScanError, ScanScore};
 pub use tempered::{
     effective_sample_size, normalize_log_weights, NormalizeError, Normalized, TemperError, Tempered,

@@ -38,6 +38,33 @@ fn race(c: &mut Criterion) {
         scans.len()
     );
 
+    cast_work_histogram(&beam, &data);
+    for min_jump in [1.0f32, 3.0, 5.0, 8.0, 12.0] {
+        let tuned = beamfield::BeamFieldModel::new(
+            *beam.model(),
+            beam.caster().with_min_jump_cells(min_jump),
+        );
+        let (mut jumps, mut steps, mut moved) = (0u64, 0u64, 0usize);
+        let (mut z0, mut z1) = ([0.0f32; N], [0.0f32; N]);
+        for (_, _, pose) in scans {
+            let mut traces = [beamfield::CastTrace::default(); N];
+            tuned.cast_layout_traced(layout, pose, &mut z1, &mut traces);
+            beam.cast_layout(layout, pose, Stride::ONE, &mut z0);
+            jumps += traces.iter().map(|t| u64::from(t.jumps)).sum::<u64>();
+            steps += traces.iter().map(|t| u64::from(t.steps)).sum::<u64>();
+            moved += z0
+                .iter()
+                .zip(&z1)
+                .filter(|(a, b)| (*a - *b).abs() > 1e-4)
+                .count();
+        }
+        eprintln!(
+            "race: min jump {min_jump} cells: mean jumps {:.2}, steps {:.2} per cast; {moved} casts differ from the default by > 0.1 mm",
+            jumps as f64 / beams as f64,
+            steps as f64 / beams as f64
+        );
+    }
+
     let mut g = c.benchmark_group("race_intel");
     g.throughput(Throughput::Elements(scans.len() as u64));
     g.bench_function("baseline_sum_ranges", |b| {
@@ -91,7 +118,82 @@ fn race(c: &mut Criterion) {
             acc
         })
     });
+    // The same casts with other thresholds for taking a sphere-tracing jump (default 2 cells).
+    for min_jump in [1.0f32, 3.0, 5.0, 8.0, 12.0] {
+        let tuned = beamfield::BeamFieldModel::new(
+            *beam.model(),
+            beam.caster().with_min_jump_cells(min_jump),
+        );
+        g.bench_function(format!("raycast_only_min_jump_{min_jump}"), |b| {
+            b.iter(|| {
+                let mut acc = 0.0f32;
+                for (_, _, pose) in scans {
+                    tuned.cast_layout(layout, black_box(pose), Stride::ONE, &mut z_star);
+                    acc += z_star.iter().sum::<f32>();
+                }
+                acc
+            })
+        });
+    }
     g.finish();
+}
+
+/// Where the ray casting's time goes: per cast (the bench's 16,380), the sphere-tracing jumps
+/// and the cell-by-cell steps of the grid traversal, as histograms, split by whether the
+/// reading is a max-range one.
+fn cast_work_histogram(beam: &beamfield::BeamFieldModel<'_>, data: &intel_race::RaceData) {
+    let mut z_star = [0.0f32; N];
+    let mut all: Vec<(beamfield::CastTrace, bool)> = Vec::new();
+    for (_, scan, pose) in &data.scans {
+        let mut traces = [beamfield::CastTrace::default(); N];
+        beam.cast_layout_traced(&data.layout, pose, &mut z_star, &mut traces);
+        for (t, &z) in traces.iter().zip(scan.ranges_m()) {
+            all.push((*t, z >= data.max_range_m));
+        }
+    }
+    let edges = [0u32, 1, 2, 4, 8, 16, 32, 64, 128, 256, 512, u32::MAX];
+    let hist = |f: &dyn Fn(&beamfield::CastTrace) -> u32, max_only: Option<bool>| {
+        let mut counts = vec![0usize; edges.len() - 1];
+        let (mut n, mut sum) = (0usize, 0u64);
+        for (t, is_max) in &all {
+            if max_only.is_some_and(|m| m != *is_max) {
+                continue;
+            }
+            let v = f(t);
+            n += 1;
+            sum += u64::from(v);
+            if let Some(b) = edges.windows(2).position(|w| v >= w[0] && v < w[1]) {
+                counts[b] += 1;
+            }
+        }
+        let bins: Vec<String> = edges
+            .windows(2)
+            .zip(&counts)
+            .map(|(w, c)| {
+                let hi = if w[1] == u32::MAX {
+                    "inf".to_string()
+                } else {
+                    w[1].to_string()
+                };
+                format!("[{},{}):{}", w[0], hi, c)
+            })
+            .collect();
+        format!(
+            "n {n}, mean {:.2}; {}",
+            sum as f64 / n.max(1) as f64,
+            bins.join(" ")
+        )
+    };
+    let steps = |t: &beamfield::CastTrace| t.steps;
+    let jumps = |t: &beamfield::CastTrace| t.jumps;
+    for (label, sel) in [
+        ("all", None),
+        ("non-max", Some(false)),
+        ("max-range", Some(true)),
+    ] {
+        eprintln!("race: cast steps per cast ({label}): {}", hist(&steps, sel));
+        eprintln!("race: cast jumps per cast ({label}): {}", hist(&jumps, sel));
+    }
 }
 
 criterion_group!(benches, race);

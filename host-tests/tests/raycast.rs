@@ -24,9 +24,11 @@ impl Rng {
 
 /// Casts `rays` random rays (start uniform over the map's rectangle, angle uniform, range
 /// limit 12 m) both ways; returns the absolute errors in cells, sorted.
-fn errors_in_cells(map: &OccupancyMap, rays: usize, seed: u64) -> Vec<f64> {
+fn errors_in_cells(map: &OccupancyMap, rays: usize, seed: u64, min_jump: f32) -> Vec<f64> {
     let blob = build_blob(map, DEFAULT_MAX_DIST_M).unwrap();
-    let caster = RayCaster::new(FieldView::parse(&blob).unwrap()).unwrap();
+    let caster = RayCaster::new(FieldView::parse(&blob).unwrap())
+        .unwrap()
+        .with_min_jump_cells(min_jump);
     let mut rng = Rng(seed);
     let res = map.resolution_m;
     let (w, h) = (f64::from(map.width) * res, f64::from(map.height) * res);
@@ -46,12 +48,16 @@ fn errors_in_cells(map: &OccupancyMap, rays: usize, seed: u64) -> Vec<f64> {
 }
 
 fn check(name: &str, map: &OccupancyMap, rays: usize, seed: u64) {
-    let e = errors_in_cells(map, rays, seed);
+    check_with(name, map, rays, seed, beamfield::raycast::JUMP_MIN_CELLS);
+}
+
+fn check_with(name: &str, map: &OccupancyMap, rays: usize, seed: u64, min_jump: f32) {
+    let e = errors_in_cells(map, rays, seed, min_jump);
     let q = |p: f64| e[((e.len() - 1) as f64 * p) as usize];
     let over = e.iter().filter(|&&x| x > 1.0).count();
     let exact = e.iter().filter(|&&x| x < 1e-3).count();
     println!(
-        "{name}: {rays} rays, errors in cells: median {:.2e}, p99 {:.2e}, p99.9 {:.2e}, max {:.3}; \
+        "{name} (min jump {min_jump} cells): {rays} rays, errors in cells: median {:.2e}, p99 {:.2e}, p99.9 {:.2e}, max {:.3}; \
          {exact} within 1e-3 cell, {over} over one cell",
         q(0.5),
         q(0.99),
@@ -80,6 +86,9 @@ fn intel_within_one_cell() {
     let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
     let m = map_from_log(&log, log.max_range.value_m().unwrap()).unwrap();
     check("intel", &m, 20_000, 3);
+    // The jump threshold is a speed knob only: no jumps at all, and few long ones.
+    check_with("intel", &m, 20_000, 3, 0.0);
+    check_with("intel", &m, 20_000, 3, 8.0);
 }
 
 /// `BeamFieldModel` on real Intel scans at their logged poses equals the beam mixture scored
