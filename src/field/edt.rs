@@ -565,6 +565,81 @@ mod tests {
         }
     }
 
+    /// The byte square saturates exactly: `min(g², 255)`, and "no seed" gives 255.
+    #[test]
+    fn saturated_square_is_clamped_square() {
+        for g in (0u32..300).chain([EDT_MAX_SIDE as u32 - 1, NO_SEED, NO_SEED + 40_000]) {
+            let want = u64::from(g).pow(2).min(255) as u8;
+            assert_eq!(saturated_square(g), want, "g = {g}");
+        }
+    }
+
+    /// The window search on rows longer than a tile (cells near tile edges see across them):
+    /// whenever it reports success, every output is the exact 1-D minimum; a row whose every
+    /// minimum is within WINDOW² must succeed (and many do, so the comparison is made); a row
+    /// with a cell 14 columns from every seed must not.
+    #[test]
+    fn window_row_against_brute_force() {
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let mut settled = 0;
+        for len in [
+            1usize, 15, 16, 17, 255, 256, 257, 280, 511, 512, 513, 700, 1030,
+        ] {
+            for i in 0..40 {
+                // Column distances: dense rows (mostly small, some large, some "no seed"), and
+                // sparse rows whose minima are often just beyond the window's reach.
+                let row: Vec<u32> = (0..len)
+                    .map(|_| {
+                        if i % 2 == 0 {
+                            match next() % 10 {
+                                0..=5 => (next() % 12) as u32,
+                                6 | 7 => (next() % 40) as u32,
+                                8 => NO_SEED,
+                                _ => (next() % 20_000) as u32,
+                            }
+                        } else if next() % 13 == 0 {
+                            (next() % 16) as u32
+                        } else {
+                            NO_SEED
+                        }
+                    })
+                    .collect();
+                let want: Vec<u32> = (0..len)
+                    .map(|x| {
+                        (0..len)
+                            .filter(|&p| (row[p] as usize) < EDT_MAX_SIDE)
+                            .map(|p| row[p].pow(2) + (x.abs_diff(p) as u32).pow(2))
+                            .min()
+                            .unwrap_or(EDT_INFINITY)
+                    })
+                    .collect();
+                let mut out = vec![0u32; len];
+                let ok = window_row(&row, &mut out);
+                // Every minimum within WINDOW² comes from inside the window: settled.
+                let near = (WINDOW * WINDOW) as u32;
+                assert!(ok || want.iter().any(|&v| v > near), "len {len}");
+                if ok {
+                    assert_eq!(out, want, "len {len}");
+                    settled += 1;
+                }
+            }
+        }
+        assert!(settled > 100, "only {settled} rows settled by the window");
+        // One cell 14 columns from every seed: 14² > 13², not settled.
+        let mut row = vec![0u32; 600];
+        for v in &mut row[286..=314] {
+            *v = NO_SEED;
+        }
+        let mut out = vec![0u32; 600];
+        assert!(!window_row(&row, &mut out));
+    }
+
     #[test]
     fn errors() {
         let mut g = [0u32; 6];
