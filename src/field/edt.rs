@@ -12,8 +12,9 @@
 //! (`host-tests/tests/field_edt.rs` checks it on random grids and real maps).
 //!
 //! On a plain occupancy grid the column pass is two sweeps over whole rows, and a row is first
-//! tried with a bounded, vectorizable window search that is exact whenever its results are small
-//! enough (see [`squared_edt`]); the envelope handles every other row.
+//! tried with a bounded window search in saturating byte arithmetic (16 cells per 128-bit
+//! register) that is exact whenever its results are small enough (see [`squared_edt`]); the
+//! envelope handles every other row.
 //!
 //! Memory belongs to the caller: the grid is transformed in place and three scratch slices of
 //! [`edt_scratch_len`] elements are passed in. No allocation, no panic.
@@ -87,9 +88,12 @@ pub struct EdtScratch<'a> {
 ///
 /// A plain occupancy grid (every cell 0 or [`EDT_INFINITY`]) takes a fast path that reads and
 /// writes the grid in memory order: the distance down each column comes from two sweeps over
-/// whole rows, and each row is first tried with a branch-free search of the 12 cells on either
-/// side, which is exact when every result is at most 13² (nothing farther can do better); a row
-/// where it is not goes to the envelope. Timings: `host-tests/benches/field.rs`.
+/// whole rows, and each row, as soon as the upward sweep has finished it, is first tried with a
+/// branch-free search of the 12 cells on either side, which is exact when every result is at
+/// most 13² (nothing farther can do better). The search works on squares saturated at 255 in
+/// bytes (saturation cannot hide a result ≤ 13²), 256 cells at a time in two stack buffers
+/// (about 0.5 KiB); a row it does not settle goes to the envelope. Timings:
+/// `host-tests/benches/field.rs`.
 ///
 /// # Exactness
 /// All arithmetic is integer: parabola intersections are rationals compared by
@@ -149,7 +153,8 @@ pub fn squared_edt(
 /// that adding a column's length to it stays below 2³¹, so the sweeps can compare as `i32`.
 const NO_SEED: u32 = 1 << 30;
 
-/// The transform of a plain occupancy grid (every cell 0 or [`EDT_INFINITY`]), in memory order.
+/// The transform of a plain occupancy grid, in memory order. Every cell must be 0 or
+/// [`EDT_INFINITY`] on entry (the down-sweep relies on it; [`squared_edt`] checks it).
 ///
 /// Column pass: a downward sweep over whole rows gives each cell its distance in cells to the
 /// nearest seed at or above it in its column; an upward sweep takes the minimum with the one
