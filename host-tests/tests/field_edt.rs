@@ -156,13 +156,16 @@ fn willow_crops_and_samples_bit_for_bit() {
 /// Larger random grids than the proptest's, whole, against brute force: at 3 % occupied (the
 /// bench's density) almost every row is settled by the row pass's bounded window search; at
 /// 0.3 % most rows are not and fall back to the envelope, so both paths and their switching
-/// are checked on every cell.
+/// are checked on every cell; the widest grids' rows span several of the search's tiles.
 #[test]
 fn large_random_grids_bit_for_bit() {
     for (w, h, density, seed) in [
         (230usize, 170usize, 0.03f64, 3u64),
         (230, 170, 0.003, 5),
         (61, 300, 0.01, 9),
+        // Rows longer than the window search's 256-cell tiles: cells near tile edges.
+        (600, 60, 0.03, 13),
+        (530, 50, 0.008, 17),
     ] {
         let mut s = seed;
         let mask: Vec<bool> = (0..w * h)

@@ -12,8 +12,9 @@
 //! (`host-tests/tests/field_edt.rs` checks it on random grids and real maps).
 //!
 //! On a plain occupancy grid the column pass is two sweeps over whole rows, and a row is first
-//! tried with a bounded, vectorizable window search that is exact whenever its results are small
-//! enough (see [`squared_edt`]); the envelope handles every other row.
+//! tried with a bounded window search in saturating byte arithmetic (16 cells per 128-bit
+//! register) that is exact whenever its results are small enough (see [`squared_edt`]); the
+//! envelope handles every other row.
 //!
 //! Memory belongs to the caller: the grid is transformed in place and three scratch slices of
 //! [`edt_scratch_len`] elements are passed in. No allocation, no panic.
@@ -87,9 +88,12 @@ pub struct EdtScratch<'a> {
 ///
 /// A plain occupancy grid (every cell 0 or [`EDT_INFINITY`]) takes a fast path that reads and
 /// writes the grid in memory order: the distance down each column comes from two sweeps over
-/// whole rows, and each row is first tried with a branch-free search of the 12 cells on either
-/// side, which is exact when every result is at most 13² (nothing farther can do better); a row
-/// where it is not goes to the envelope. Timings: `host-tests/benches/field.rs`.
+/// whole rows, and each row, as soon as the upward sweep has finished it, is first tried with a
+/// branch-free search of the 12 cells on either side, which is exact when every result is at
+/// most 13² (nothing farther can do better). The search works on squares saturated at 255 in
+/// bytes (saturation cannot hide a result ≤ 13²), 256 cells at a time in two stack buffers
+/// (about 0.5 KiB); a row it does not settle goes to the envelope. Timings:
+/// `host-tests/benches/field.rs`.
 ///
 /// # Exactness
 /// All arithmetic is integer: parabola intersections are rationals compared by
@@ -129,29 +133,7 @@ pub fn squared_edt(
         .chunks(256)
         .all(|b| b.iter().fold(true, |ok, &v| ok & (v.wrapping_add(1) <= 1)));
     if binary {
-        // A plain occupancy grid: each cell gets its squared distance to the nearest seed in
-        // its column, then every row takes the minimum over the row (see `window_row`).
-        binary_columns(grid, width);
-        let mut envelope_rows = 0usize;
-        for row in grid.chunks_exact_mut(width) {
-            if envelope_rows == 0 {
-                if let Some(out) = env.heights.get_mut(..width) {
-                    if window_row(row, out) {
-                        for (c, &v) in row.iter_mut().zip(out.iter()) {
-                            *c = v;
-                        }
-                        continue;
-                    }
-                }
-                // The window did not settle this row: the next rows, likely as sparse, go
-                // straight to the envelope (a speed choice only; both give the same values).
-                envelope_rows = ENVELOPE_ROWS_AFTER_MISS;
-            } else {
-                envelope_rows -= 1;
-            }
-            let count = env.build(row.iter().copied());
-            env.write(count, row.iter_mut());
-        }
+        binary_transform(grid, width, &mut env);
     } else {
         // General sampled function: the envelope down every column x, x + w, x + 2w, …
         for x in 0..width {
@@ -166,51 +148,96 @@ pub fn squared_edt(
     Ok(())
 }
 
-/// The column pass for a grid of 0 (seed) and [`EDT_INFINITY`]: each cell gets the squared
-/// distance to the nearest seed in its column, or [`EDT_INFINITY`] if the column has none.
+/// A cell's column distance during the binary path when its column has no seed at all,
+/// cells. Above every real column distance (those are below [`EDT_MAX_SIDE`]), and low enough
+/// that adding a column's length to it stays below 2³¹, so the sweeps can compare as `i32`.
+const NO_SEED: u32 = 1 << 30;
+
+/// The transform of a plain occupancy grid, in memory order. Every cell must be 0 or
+/// [`EDT_INFINITY`] on entry (the down-sweep relies on it; [`squared_edt`] checks it).
 ///
-/// A downward sweep keeps the distance in cells to the nearest seed at or above each row
-/// index, an upward sweep takes the minimum with the nearest seed on the other side and squares
-/// each row once the row above it no longer needs it. Distances stay below [`EDT_MAX_SIDE`], so
-/// `EDT_INFINITY` (saturating) marks "no seed".
-fn binary_columns(grid: &mut [u32], width: usize) {
-    // Down: rows in increasing order; row 0 keeps its value (0 or "none").
-    let mut prev: Option<&mut [u32]> = None;
+/// Column pass: a downward sweep over whole rows gives each cell its distance in cells to the
+/// nearest seed at or above it in its column; an upward sweep takes the minimum with the one
+/// below. Each row is final as soon as the upward sweep has used it for the row above, and
+/// then takes its row pass at once (while it is still in cache): [`window_row`], or the
+/// envelope over the squared column distances when the window does not settle it.
+fn binary_transform(grid: &mut [u32], width: usize, env: &mut Envelope<'_>) {
+    // Down: a seed stays 0, any other cell is one farther than the cell above it; row 0 has
+    // only seeds and "no seed".
+    let mut above: Option<&mut [u32]> = None;
     for row in grid.chunks_exact_mut(width) {
-        if let Some(p) = prev {
-            // The cell is 0 (stays 0) or EDT_INFINITY (becomes one more than the cell above).
-            for (c, &a) in row.iter_mut().zip(p.iter()) {
-                *c = (*c).min(a.saturating_add(1));
+        match above {
+            Some(a) => {
+                for (c, &up) in row.iter_mut().zip(a.iter()) {
+                    // `*c` is 0 or all ones, so the AND is 0 or `up + 1` (`up` ≤ NO_SEED +
+                    // height: no overflow).
+                    *c &= up + 1;
+                }
+            }
+            None => {
+                for c in row.iter_mut() {
+                    *c &= NO_SEED;
+                }
             }
         }
-        prev = Some(row);
+        above = Some(row);
     }
-    // Up: rows in decreasing order.
-    let mut next: Option<&mut [u32]> = None;
+    // Up, with each finished row's row pass.
+    let mut misses = RowPass::default();
+    let mut below: Option<&mut [u32]> = None;
     for row in grid.chunks_exact_mut(width).rev() {
-        if let Some(n) = next {
-            for (c, b) in row.iter_mut().zip(n.iter_mut()) {
-                *c = (*c).min(b.saturating_add(1));
-                *b = square_or_none(*b);
+        if let Some(b) = below {
+            for (c, &down) in row.iter_mut().zip(b.iter()) {
+                // Every value is below 2³¹ (see NO_SEED), so a signed minimum is exact.
+                *c = (*c as i32).min(down as i32 + 1) as u32;
             }
+            misses.run(b, env);
         }
-        next = Some(row);
+        below = Some(row);
     }
-    if let Some(first) = next {
-        for c in first.iter_mut() {
-            *c = square_or_none(*c);
-        }
+    if let Some(top) = below {
+        misses.run(top, env);
     }
 }
 
-/// `g²` for a column distance `g < EDT_MAX_SIDE`, [`EDT_INFINITY`] for [`EDT_INFINITY`]: a
-/// select rather than `saturating_mul`, so the loops around it vectorize.
+/// The row pass of the binary path, with its memory of recent rows the window did not settle.
+#[derive(Default)]
+struct RowPass {
+    /// Rows still to send straight to the envelope after a miss.
+    envelope_rows: usize,
+}
+
+impl RowPass {
+    /// Replaces `row`'s column distances (cells, [`NO_SEED`] or more for none) with the
+    /// squared distances to the nearest seed of the grid.
+    fn run(&mut self, row: &mut [u32], env: &mut Envelope<'_>) {
+        if self.envelope_rows == 0 {
+            if let Some(out) = env.heights.get_mut(..row.len()) {
+                if window_row(row, out) {
+                    for (c, &v) in row.iter_mut().zip(out.iter()) {
+                        *c = v;
+                    }
+                    return;
+                }
+            }
+            // The window did not settle this row: the next rows, likely as sparse, go
+            // straight to the envelope (a speed choice only; both give the same values).
+            self.envelope_rows = ENVELOPE_ROWS_AFTER_MISS;
+        } else {
+            self.envelope_rows -= 1;
+        }
+        let count = env.build(row.iter().map(|&g| square_or_none(g)));
+        env.write(count, row.iter_mut());
+    }
+}
+
+/// `g²` for a column distance `g < EDT_MAX_SIDE`, [`EDT_INFINITY`] for "no seed" (any larger
+/// value), squared cells.
 fn square_or_none(g: u32) -> u32 {
-    let sq = g.wrapping_mul(g);
-    if g == EDT_INFINITY {
-        EDT_INFINITY
+    if (g as usize) < EDT_MAX_SIDE {
+        g * g
     } else {
-        sq
+        EDT_INFINITY
     }
 }
 
@@ -218,42 +245,95 @@ fn square_or_none(g: u32) -> u32 {
 const WINDOW: usize = 12;
 
 /// A windowed minimum at most this is exact: every cell more than [`WINDOW`] columns away adds
-/// at least `(WINDOW + 1)²` on its own. Squared cells.
-const WINDOW_EXACT_UP_TO: u32 = ((WINDOW + 1) * (WINDOW + 1)) as u32;
+/// at least `(WINDOW + 1)²` on its own. Squared cells; below `u8::MAX`, which the window's
+/// byte arithmetic saturates at.
+const WINDOW_EXACT_UP_TO: u8 = ((WINDOW + 1) * (WINDOW + 1)) as u8;
 
 /// How many rows skip the window and go to the envelope after a row the window did not settle.
 const ENVELOPE_ROWS_AFTER_MISS: usize = 8;
 
-/// The row pass by a bounded search: `out[x] = min over |d| ≤ WINDOW of row[x + d] + d²`, with
-/// `row` the column pass's squared distances. Returns whether every `out[x]` is at most
+/// How many cells of a row [`window_row`] handles at once (its two stack buffers hold
+/// `2 · TILE + 2 · WINDOW` bytes).
+const TILE: usize = 256;
+
+/// A column distance's square as a byte, saturated: `min(g, 16)²`, then at most 255. Every
+/// value the window computes from it is then `min(true value, 255)`: saturation commutes with
+/// adding a non-negative square and with taking minima.
+fn saturated_square(g: u32) -> u8 {
+    // Written as a signed 16-bit clamp, a 16-bit minimum and product and an unsigned byte
+    // clamp, the forms SSE2 has single instructions for (`g` is below 2³¹, see `NO_SEED`).
+    let g16 = (g as i32).clamp(i32::from(i16::MIN), i32::from(i16::MAX)) as i16;
+    let m = g16.min(16);
+    (m * m).clamp(0, 255) as u8
+}
+
+/// The row pass by a bounded search: `out[x] = min over |d| ≤ WINDOW of row[x + d]² + d²`, with
+/// `row` the column distances. Returns whether every `out[x]` is at most
 /// [`WINDOW_EXACT_UP_TO`]; then every `out[x]` is the exact row minimum (cells outside the
 /// window cannot beat it). Otherwise `out` is not the answer and the caller runs the envelope.
 ///
-/// Branch-free loops over whole slices, so they vectorize; on a grid whose every cell has a seed
-/// within about [`WINDOW`] cells this costs a fraction of the envelope's data-dependent loop.
-/// `out` is as long as `row` (the caller passes a scratch slice cut to the row's length).
+/// The search runs on saturated byte squares (see [`saturated_square`]), [`TILE`] cells at a
+/// time, in branch-free loops over whole slices, so it vectorizes 16 cells to a 128-bit
+/// register. `out` is as long as `row` (the caller passes a scratch slice cut to the row's
+/// length).
 fn window_row(row: &[u32], out: &mut [u32]) -> bool {
-    for (o, &v) in out.iter_mut().zip(row.iter()) {
-        *o = v;
-    }
-    for d in 1..=WINDOW {
-        let d2 = (d * d) as u32;
-        // Cells d to the right of x.
-        for (o, &v) in out.iter_mut().zip(row.get(d..).unwrap_or(&[])) {
-            *o = (*o).min(v.saturating_add(d2));
+    let mut start = 0usize;
+    for out_tile in out.chunks_mut(TILE) {
+        let n = out_tile.len();
+        // `padded[i]` holds cell `start + i − WINDOW`; cells off the row stay saturated.
+        let mut padded = [u8::MAX; TILE + 2 * WINDOW];
+        let lo = start.saturating_sub(WINDOW);
+        let hi = (start + n + WINDOW).min(row.len());
+        let first = WINDOW - (start - lo);
+        let src = row.get(lo..hi).unwrap_or(&[]);
+        let dst = padded.get_mut(first..first + src.len()).unwrap_or(&mut []);
+        for (p, &g) in dst.iter_mut().zip(src.iter()) {
+            *p = saturated_square(g);
         }
-        // Cells d to the left of x.
-        for (o, &v) in out
-            .get_mut(d..)
-            .unwrap_or(&mut [])
-            .iter_mut()
-            .zip(row.iter())
-        {
-            *o = (*o).min(v.saturating_add(d2));
+        // `best[i]` for cell `start + i`: the cell itself, then offsets 1 to WINDOW, each a
+        // vectorized pass over the tile with its square as a constant.
+        let mut best = [0u8; TILE];
+        let best = best.get_mut(..n).unwrap_or(&mut []);
+        for (b, &v) in best.iter_mut().zip(padded.get(WINDOW..).unwrap_or(&[])) {
+            *b = v;
         }
+        window_step::<1>(best, &padded);
+        window_step::<2>(best, &padded);
+        window_step::<3>(best, &padded);
+        window_step::<4>(best, &padded);
+        window_step::<5>(best, &padded);
+        window_step::<6>(best, &padded);
+        window_step::<7>(best, &padded);
+        window_step::<8>(best, &padded);
+        window_step::<9>(best, &padded);
+        window_step::<10>(best, &padded);
+        window_step::<11>(best, &padded);
+        window_step::<12>(best, &padded);
+        if best.iter().fold(0u8, |m, &v| m.max(v)) > WINDOW_EXACT_UP_TO {
+            return false;
+        }
+        for (o, &b) in out_tile.iter_mut().zip(best.iter()) {
+            *o = u32::from(b);
+        }
+        start += n;
     }
-    out.iter()
-        .fold(true, |ok, &v| ok & (v <= WINDOW_EXACT_UP_TO))
+    true
+}
+
+// `window_row` makes one `window_step` call per offset, written out.
+const _: () = assert!(WINDOW == 12);
+
+/// One offset `D` of [`window_row`]'s search over a tile: `best[i]` takes the minimum with
+/// `min(padded[WINDOW + i − D], padded[WINDOW + i + D]) + D²` (saturating). A const
+/// parameter, so that `D²` and the offsets are constants in each call.
+#[inline(always)]
+fn window_step<const D: usize>(best: &mut [u8], padded: &[u8]) {
+    let d2 = (D * D) as u8;
+    let left = padded.get(WINDOW - D..).unwrap_or(&[]);
+    let right = padded.get(WINDOW + D..).unwrap_or(&[]);
+    for (b, (&l, &r)) in best.iter_mut().zip(left.iter().zip(right.iter())) {
+        *b = (*b).min(l.min(r).saturating_add(d2));
+    }
 }
 
 /// The lower envelope of the parabolas `(x − p)² + f(p)` of one line (F&H's 1-D transform),
@@ -488,6 +568,81 @@ mod tests {
             run(&mut g, w, h);
             assert_eq!(g, want, "{w}×{h} {f:?}");
         }
+    }
+
+    /// The byte square saturates exactly: `min(g², 255)`, and "no seed" gives 255.
+    #[test]
+    fn saturated_square_is_clamped_square() {
+        for g in (0u32..300).chain([EDT_MAX_SIDE as u32 - 1, NO_SEED, NO_SEED + 40_000]) {
+            let want = u64::from(g).pow(2).min(255) as u8;
+            assert_eq!(saturated_square(g), want, "g = {g}");
+        }
+    }
+
+    /// The window search on rows longer than a tile (cells near tile edges see across them):
+    /// whenever it reports success, every output is the exact 1-D minimum; a row whose every
+    /// minimum is within WINDOW² must succeed (and many do, so the comparison is made); a row
+    /// with a cell 14 columns from every seed must not.
+    #[test]
+    fn window_row_against_brute_force() {
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            s
+        };
+        let mut settled = 0;
+        for len in [
+            1usize, 15, 16, 17, 255, 256, 257, 280, 511, 512, 513, 700, 1030,
+        ] {
+            for i in 0..40 {
+                // Column distances: dense rows (mostly small, some large, some "no seed"), and
+                // sparse rows whose minima are often just beyond the window's reach.
+                let row: Vec<u32> = (0..len)
+                    .map(|_| {
+                        if i % 2 == 0 {
+                            match next() % 10 {
+                                0..=5 => (next() % 12) as u32,
+                                6 | 7 => (next() % 40) as u32,
+                                8 => NO_SEED,
+                                _ => (next() % 20_000) as u32,
+                            }
+                        } else if next() % 13 == 0 {
+                            (next() % 16) as u32
+                        } else {
+                            NO_SEED
+                        }
+                    })
+                    .collect();
+                let want: Vec<u32> = (0..len)
+                    .map(|x| {
+                        (0..len)
+                            .filter(|&p| (row[p] as usize) < EDT_MAX_SIDE)
+                            .map(|p| row[p].pow(2) + (x.abs_diff(p) as u32).pow(2))
+                            .min()
+                            .unwrap_or(EDT_INFINITY)
+                    })
+                    .collect();
+                let mut out = vec![0u32; len];
+                let ok = window_row(&row, &mut out);
+                // Every minimum within WINDOW² comes from inside the window: settled.
+                let near = (WINDOW * WINDOW) as u32;
+                assert!(ok || want.iter().any(|&v| v > near), "len {len}");
+                if ok {
+                    assert_eq!(out, want, "len {len}");
+                    settled += 1;
+                }
+            }
+        }
+        assert!(settled > 100, "only {settled} rows settled by the window");
+        // One cell 14 columns from every seed: 14² > 13², not settled.
+        let mut row = vec![0u32; 600];
+        for v in &mut row[286..=314] {
+            *v = NO_SEED;
+        }
+        let mut out = vec![0u32; 600];
+        assert!(!window_row(&row, &mut out));
     }
 
     #[test]
