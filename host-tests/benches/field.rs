@@ -11,8 +11,8 @@
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, FieldView, EDT_INFINITY};
 use beamfield::{BeamLayout, LikelihoodField, LikelihoodParams, Pose, Scan, SensorMount};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::{load_map, Occupancy};
+use beamfield_tools::field_cmd::{build_blob, edt_seeds};
+use beamfield_tools::map::load_map;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::hint::black_box;
 
@@ -168,17 +168,7 @@ fn transform(c: &mut Criterion) {
         .collect();
     let willow =
         load_map(&host_tests::data_dir().join("map_willow_garage/willow-full-0.05.yaml")).unwrap();
-    let seeds_willow: Vec<u32> = willow
-        .cells
-        .iter()
-        .map(|c| {
-            if *c == Occupancy::Occupied {
-                0
-            } else {
-                EDT_INFINITY
-            }
-        })
-        .collect();
+    let seeds_willow = edt_seeds(&willow);
     let wb = build_blob(&willow, 2.0).unwrap();
     eprintln!(
         "blob bytes per cell: Willow {} bytes / {} cells = {:.5}",

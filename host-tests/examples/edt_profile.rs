@@ -6,7 +6,8 @@
 //! the same with a third argument `skip` counts everything but the transform.
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, EDT_INFINITY};
-use beamfield_tools::map::{load_map, Occupancy};
+use beamfield_tools::field_cmd::edt_seeds;
+use beamfield_tools::map::load_map;
 use std::hint::black_box;
 
 fn main() {
@@ -18,17 +19,7 @@ fn main() {
     let (seeds, w, h) = if which == "willow" {
         let m = load_map(&host_tests::data_dir().join("map_willow_garage/willow-full-0.05.yaml"))
             .unwrap();
-        let seeds: Vec<u32> = m
-            .cells
-            .iter()
-            .map(|c| {
-                if *c == Occupancy::Occupied {
-                    0
-                } else {
-                    EDT_INFINITY
-                }
-            })
-            .collect();
+        let seeds = edt_seeds(&m);
         (seeds, m.width as usize, m.height as usize)
     } else {
         // The bench's 400 × 400 grid: the same generator, seed and 3 % density.

@@ -96,15 +96,10 @@ impl std::fmt::Display for FieldCmdError {
 
 impl std::error::Error for FieldCmdError {}
 
-/// Exact squared distances (cell units) of a map's cells to the nearest occupied cell, row 0 =
-/// lowest y; [`EDT_INFINITY`] everywhere when nothing is occupied.
-///
-/// # Errors
-/// [`FieldCmdError::Edt`] when the map is larger than the transform accepts.
-pub fn squared_distances(map: &OccupancyMap) -> Result<Vec<u32>, FieldCmdError> {
-    let (w, h) = (map.width as usize, map.height as usize);
-    let mut grid: Vec<u32> = map
-        .cells
+/// The transform's input for `map`: 0 on occupied cells (the seeds), [`EDT_INFINITY`] on free
+/// and unknown ones, row-major from the lowest y.
+pub fn edt_seeds(map: &OccupancyMap) -> Vec<u32> {
+    map.cells
         .iter()
         .map(|c| {
             if *c == Occupancy::Occupied {
@@ -113,7 +108,17 @@ pub fn squared_distances(map: &OccupancyMap) -> Result<Vec<u32>, FieldCmdError> 
                 EDT_INFINITY
             }
         })
-        .collect();
+        .collect()
+}
+
+/// Exact squared distances (cell units) of a map's cells to the nearest occupied cell, row 0 =
+/// lowest y; [`EDT_INFINITY`] everywhere when nothing is occupied.
+///
+/// # Errors
+/// [`FieldCmdError::Edt`] when the map is larger than the transform accepts.
+pub fn squared_distances(map: &OccupancyMap) -> Result<Vec<u32>, FieldCmdError> {
+    let (w, h) = (map.width as usize, map.height as usize);
+    let mut grid = edt_seeds(map);
     let n = edt_scratch_len(w, h);
     let (mut sites, mut bounds, mut heights) = (vec![0u32; n], vec![0i64; n], vec![0u32; n]);
     squared_edt(
