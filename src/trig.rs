@@ -34,7 +34,9 @@ const NO_ANGLE_LEFT: f32 = 16_777_216.0;
 /// `|x| ≥ 2²⁴` rad, where neighbouring f32 values are 2 rad or more apart, the result is the
 /// arbitrary but valid `(0, 1)`. Non-finite `x` gives `(NaN, NaN)`. No panics, no tables, no
 /// f64, no stack beyond registers.
-#[inline]
+// Not inlined: a few dozen instructions once per pose, where inlining at every call site
+// cost about 250 bytes of flash each (`cargo xtask budgets`).
+#[inline(never)]
 pub fn sin_cos(x: f32) -> (f32, f32) {
     if !x.is_finite() {
         return (f32::NAN, f32::NAN);

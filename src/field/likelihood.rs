@@ -240,10 +240,7 @@ impl<'a> LikelihoodField<'a> {
     /// (`table[c] = term(c · d_max/255)`). Costs 256 `exp` and `ln`; do it once.
     pub fn new(view: FieldView<'a>, params: LikelihoodParams) -> Self {
         let step = view.step_m();
-        let mut table = [0.0f32; LIKELIHOOD_TABLE_LEN];
-        for (c, t) in table.iter_mut().enumerate() {
-            *t = params.beam_log_likelihood(c as f32 * step);
-        }
+        let table = core::array::from_fn(|c| params.beam_log_likelihood(c as f32 * step));
         Self {
             view,
             params,

@@ -98,33 +98,42 @@ impl<'a> LikelihoodField<'a> {
         let inv = view.inv_cell_size();
         let max_r = self.params().max_range_m();
         let ranges = scan.ranges_m();
-        let kept = || {
-            layout
-                .beams()
-                .iter()
-                .zip(ranges)
-                .step_by(stride.get())
-                .filter(move |&(_, &r)| (r >= 0.0) & (r < max_r))
-        };
+        let stepped = || layout.beams().iter().zip(ranges).step_by(stride.get());
         let mount = layout.mount();
         let (sin_m, cos_m) = math::sin_cos(mount.yaw_rad);
-        // The scan's reach in cells: every kept endpoint is within it of the robot.
+        // One pass for the counts (as `score_strided_with` counts: NaN is neither valid nor
+        // max-range, hence invalid) and the scan's reach in cells (every kept endpoint is
+        // within it of the robot).
         let mut reach = 0.0f32;
-        for (_, &r) in kept() {
-            reach = reach.max(r * inv);
+        let (mut scored, mut max_range, mut paired) = (0u32, 0u32, 0u32);
+        for (_, &r) in stepped() {
+            let keep = (r >= 0.0) & (r < max_r);
+            if keep {
+                reach = reach.max(r * inv);
+            }
+            scored += u32::from(keep);
+            max_range += u32::from(r >= max_r);
+            paired += 1;
         }
         let offset = math::sqrt(mount.x_m * mount.x_m + mount.y_m * mount.y_m) * inv;
-        let reach = f64::from(reach) + f64::from(offset) + 1.0;
-        let side = f64::from(view.width().max(view.height()));
+        // Whole cells, rounded up (so every bound below is conservative), plus one.
+        let reach = ceil_u32(reach)
+            .saturating_add(ceil_u32(offset))
+            .saturating_add(1);
+        let side = view.width().max(view.height());
         // F: the most fractional bits such that a robot anywhere within a map's side of the
         // map, plus twice the reach, stays inside ±2^(30−F) (no i32 overflow, with margin).
+        // Integer arithmetic throughout: no f64, which a Cortex-M4F would do in software.
+        let need = side
+            .saturating_add(reach.saturating_mul(2))
+            .saturating_add(4);
         let mut frac_bits = MAX_FRAC_BITS;
-        while frac_bits > 0 && side + 2.0 * reach + 4.0 >= pow2(30 - frac_bits as i32) {
+        while frac_bits > 0 && need >= 1u32 << (30 - frac_bits) {
             frac_bits -= 1;
         }
-        let scale = pow2(frac_bits as i32 + 2) as f32;
+        let scale = pow2(frac_bits as i32 + 2);
         let mut points = Vec::new();
-        for (beam, &r) in kept() {
+        for (beam, &r) in stepped().filter(|&(_, &r)| (r >= 0.0) & (r < max_r)) {
             // Saturating conversion: only an endpoint beyond 2^29 cells could saturate, and
             // then only at F = 0 (see the module docs); it is clamped, not wrapped.
             let ux = cos_m * beam.cos - sin_m * beam.sin;
@@ -135,33 +144,30 @@ impl<'a> LikelihoodField<'a> {
             let _ = points.push([x, y]);
         }
         // Overflow bound of the fixed-point sums, and the bounds under which the u32 cell
-        // index cannot wrap around onto the map (module docs).
-        let fixed_limit = pow2(31 - frac_bits as i32) - 2.0 * reach - 4.0;
-        let w = f64::from(view.width());
-        let len = view.codes().len() as f64;
-        let below = math::floor_f64((4_294_967_296.0 - len) / w) - reach - 4.0;
-        let above = math::floor_f64(4_294_967_296.0 / w) - reach - 4.0;
-        let stepped = layout
-            .beams()
-            .iter()
-            .zip(ranges)
-            .step_by(stride.get())
-            .map(|(_, &r)| r);
-        // As `score_strided_with` counts: NaN is neither valid nor max-range, hence invalid.
-        let (mut scored, mut max_range, mut paired) = (0u32, 0u32, 0u32);
-        for r in stepped {
-            scored += u32::from((r >= 0.0) & (r < max_r));
-            max_range += u32::from(r >= max_r);
-            paired += 1;
-        }
+        // index cannot wrap around onto the map (module docs), in whole cells. Each is rounded
+        // towards the safe side: `floor((2^32 − 1 − len) / w)` and `floor((2^32 − 1) / w)` are
+        // at most the exact `floor((2^32 − len) / w)` and `floor(2^32 / w)`, and the limits
+        // are converted to `f32` towards zero.
+        let reach = i64::from(reach);
+        let fixed_limit = (1i64 << (31 - frac_bits)) - 2 * reach - 4;
+        let w = view.width();
+        let room = u32::try_from(view.codes().len())
+            .ok()
+            .map(|len| u32::MAX - len)
+            .and_then(|room| room.checked_div(w));
+        let (below, above) = match (room, u32::MAX.checked_div(w)) {
+            (Some(b), Some(a)) => (i64::from(b) - reach - 4, i64::from(a) - reach - 4),
+            // A payload of 2^32 cells or more, or no columns: no pose takes the fast path.
+            _ => (-1, -1),
+        };
         let invalid = paired - scored - max_range;
         PreparedScan {
             field: self,
             points,
             frac_bits,
-            limit_x: fixed_limit as f32,
-            limit_y_lo: -(below.min(fixed_limit)) as f32,
-            limit_y_hi: above.min(fixed_limit) as f32,
+            limit_x: toward_zero_f32(fixed_limit),
+            limit_y_lo: -toward_zero_f32(below.min(fixed_limit)),
+            limit_y_hi: toward_zero_f32(above.min(fixed_limit)),
             counts: ScanScore {
                 log_likelihood: 0.0,
                 scored: sat16(scored),
@@ -192,7 +198,7 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
         let (ax, ay) = view.to_grid(pose.x_m, pose.y_m);
         let mut sum = 0.0f32;
         if self.fixed_point_at(ax, ay) {
-            let trig = pow2(TRIG_BITS) as f32;
+            let trig = pow2(TRIG_BITS);
             let (c, s) = (round_to_i32(cos_t * trig), round_to_i32(sin_t * trig));
             let f = self.frac_bits;
             // The usual case with a constant shift; the same code otherwise.
@@ -202,7 +208,7 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
                 self.fixed_path::<F, false>(ax, ay, c, s, f, &mut each)
             };
         } else {
-            let inv_scale = pow2(-(self.frac_bits as i32) - 2) as f32;
+            let inv_scale = pow2(-(self.frac_bits as i32) - 2);
             for (j, p) in self.points.iter().enumerate() {
                 let (x, y) = (p[0] as f32 * inv_scale, p[1] as f32 * inv_scale);
                 let gx = ax + (cos_t * x - sin_t * y);
@@ -237,14 +243,14 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
     ) -> f32 {
         let view = self.field.view();
         let step = view.step_m();
-        let scale = pow2(f as i32) as f32;
+        let scale = pow2(f as i32);
         let k = FixedPose {
             codes: view.codes(),
             table: self.field.table(),
             w: view.width(),
             ax: round_to_i32(ax * scale),
             ay: round_to_i32(ay * scale),
-            c,
+            nc: c.wrapping_neg(),
             s,
         };
         let points: &[[i32; 2]] = &self.points;
@@ -326,8 +332,8 @@ struct FixedPose<'a> {
     /// The robot's grid position, cells, with `f` fractional bits.
     ax: i32,
     ay: i32,
-    /// Cosine and sine of the robot's heading, Q2.30.
-    c: i32,
+    /// Minus the cosine and the sine of the robot's heading, Q2.30 (see [`FixedPose::grid`]).
+    nc: i32,
     s: i32,
 }
 
@@ -335,11 +341,18 @@ impl FixedPose<'_> {
     /// The grid point (cells, `f` fractional bits) of a robot-frame endpoint (`f + 2`
     /// fractional bits): rotation and translation as four "multiply, keep the high word, add
     /// or subtract" operations. The limits of the fast path keep these sums in range.
+    ///
+    /// With `c = −nc`: `gx = ax + ⌊c·x/2^32⌋ − ⌈s·y/2^32⌉` and
+    /// `gy = ay + ⌊s·x/2^32⌋ + ⌊c·y/2^32⌋`. The `⌊c·…⌋` terms are written as subtractions of
+    /// `nc·…` (`a − ⌈−t⌉ = a + ⌊t⌋`, exactly), so that each coordinate is a chain of two
+    /// accumulating multiplies (`smmla`/`smmls`) with the translation as the first accumulator,
+    /// and only two rotation values are live in the loop. A plain `ay + hi(s·x) + hi(c·y)` was
+    /// reassociated by LLVM into three instructions (`smmul`, `smmla`, `add`).
     #[inline(always)]
     fn grid(&self, p: &[i32; 2]) -> (i32, i32) {
         let (x, y) = (p[0], p[1]);
-        let gx = mul_hi_sub(mul_hi_add(self.ax, self.c, x), self.s, y);
-        let gy = mul_hi_add(mul_hi_add(self.ay, self.s, x), self.c, y);
+        let gx = mul_hi_sub(mul_hi_sub(self.ax, self.nc, x), self.s, y);
+        let gy = mul_hi_sub(mul_hi_add(self.ay, self.s, x), self.nc, y);
         (gx, gy)
     }
 
@@ -407,7 +420,7 @@ fn on_map_run<'p, E: FnMut(usize, f32), const FIX16: bool>(
 #[inline(never)]
 #[cold]
 fn off_map(field: &LikelihoodField<'_>, gx: i32, gy: i32, f: u32) -> (f32, u8) {
-    let inv = pow2(-(f as i32)) as f32;
+    let inv = pow2(-(f as i32));
     let code = field.view().table_index(gx as f32 * inv, gy as f32 * inv);
     let term = field.table().get(usize::from(code)).copied().unwrap_or(0.0);
     (term, code)
@@ -427,19 +440,40 @@ fn mul_hi_sub(acc: i32, a: i32, b: i32) -> i32 {
     (((i64::from(acc) << 32).wrapping_sub(i64::from(a) * i64::from(b))) >> 32) as i32
 }
 
-/// `2^e` for a small `e`, exactly.
-fn pow2(e: i32) -> f64 {
-    let mut v = 1.0f64;
-    if e >= 0 {
-        for _ in 0..e {
-            v *= 2.0;
-        }
+/// `2^e`, exactly, for `−126 ≤ e ≤ 127` (built from its bits; the exponents used here are
+/// within ±32).
+fn pow2(e: i32) -> f32 {
+    f32::from_bits(((e.clamp(-126, 127) + 127) as u32) << 23)
+}
+
+/// The smallest whole number of cells not below `v` (`v ≥ 0` here; NaN gives 0, values beyond
+/// `u32::MAX` saturate).
+fn ceil_u32(v: f32) -> u32 {
+    let t = v as u32;
+    if (t as f32) < v {
+        t.saturating_add(1)
     } else {
-        for _ in 0..e.unsigned_abs() {
-            v *= 0.5;
-        }
+        t
     }
-    v
+}
+
+/// `v` as an `f32`, rounded towards zero (so a bound never grows in magnitude); magnitudes
+/// beyond `u32::MAX` are first clamped to it (also towards zero). Once per preparation: not
+/// inlined (flash).
+#[inline(never)]
+fn toward_zero_f32(v: i64) -> f32 {
+    let m = u32::try_from(v.unsigned_abs()).unwrap_or(u32::MAX);
+    let mut f = m as f32;
+    // `f as u32` saturates at `u32::MAX`, so compare in u64.
+    if u64::from(f as u32) > u64::from(m) || f >= 4_294_967_296.0 {
+        // Rounded up: the next `f32` towards zero (`f` is positive and finite here).
+        f = f32::from_bits(f.to_bits() - 1);
+    }
+    if v < 0 {
+        -f
+    } else {
+        f
+    }
 }
 
 /// Rounds half away from zero and saturates (NaN gives 0).

@@ -512,9 +512,13 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
         }
     }
 
+    // firmware/Cargo.toml sets "s"; Cargo lets the environment override it.
+    let opt_level = std::env::var("CARGO_PROFILE_RELEASE_OPT_LEVEL")
+        .map(|v| format!("{v} (from CARGO_PROFILE_RELEASE_OPT_LEVEL)"))
+        .unwrap_or_else(|_| "\"s\"".to_string());
     println!(
-        "\nbudgets: scoring core on {FIRMWARE_TARGET} (release: LTO, 1 codegen unit, opt-level 3; \
-         firmware features: {}), instructions on QEMU {machine}",
+        "\nbudgets: scoring core on {FIRMWARE_TARGET} (release: LTO, 1 codegen unit, opt-level \
+         {opt_level}; firmware features: {}), instructions on QEMU {machine}",
         features.unwrap_or("none")
     );
     println!("budgets: {}", run.scan);
