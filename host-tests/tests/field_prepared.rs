@@ -291,3 +291,117 @@ fn wide_map_uses_fewer_fraction_bits() {
     assert!((t.differing as f64) <= t.bound);
     assert_eq!(t.fallback_poses, 0);
 }
+
+/// The robot x (or y, `along_y`) in metres, on the side `sign`, up to which the fixed-point path
+/// is taken: bisected on `uses_fixed_point` to 1 mm.
+fn fixed_point_edge(prep: &PreparedScan<'_, N>, along_y: bool, sign: f64) -> f64 {
+    let at = |d: f64| {
+        let v = (sign * d) as f32;
+        let pose = if along_y {
+            Pose::new(0.0, v, 0.0)
+        } else {
+            Pose::new(v, 0.0, 0.0)
+        };
+        prep.uses_fixed_point(&pose)
+    };
+    let (mut lo, mut hi) = (0.0f64, 1.0e7f64);
+    assert!(at(lo) && !at(hi));
+    while hi - lo > 1e-3 {
+        let mid = 0.5 * (lo + hi);
+        if at(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    sign * lo
+}
+
+/// Right at the edge of the fixed-point region (the integer overflow bound, or the bound under
+/// which the u32 cell index cannot wrap back onto the map), at every heading, the prepared
+/// score still agrees with `score`: the bounds computed at preparation are on the safe side.
+/// And at the places just outside it where integer arithmetic would alias back onto the map
+/// (a grid coordinate 2^(32−F) cells away, where the fixed-point sum wraps; a row whose u32
+/// index wraps to the map's first row) the two scores agree too, which they would not if the
+/// fixed-point path were taken there.
+/// Three maps: TurtleBot3 (F = 16), a 20,000-cell-wide strip (F = 15) and a 140,000-cell-wide
+/// strip, where `2^32 / width` rows is below the overflow bound, so the wrap bound decides in y.
+#[test]
+fn poses_at_the_edge_of_the_fixed_point_region_agree_with_score() {
+    use beamfield::field::{emit_blob, FieldHeader};
+    let log = intel();
+    let z_max = log.max_range.value_m().unwrap();
+    let layout: BeamLayout<N> = log.layout().unwrap();
+    let scan = log.scans[300].to_scan::<N>().unwrap();
+    let strip = |w: u32| {
+        let header = FieldHeader::new(w, 2, 0.05, -10.0, -0.05);
+        let codes: Vec<u8> = (0..w * 2).map(|i| ((i * 37) % 251) as u8).collect();
+        let mut blob = vec![0u8; header.required_len().unwrap()];
+        emit_blob(&header, &codes, &mut blob).unwrap();
+        blob
+    };
+    let blobs = [
+        (blob_of("map_turtlebot3_world/map.yaml"), 16),
+        (strip(20_000), 15),
+        (strip(140_000), 12),
+    ];
+    for (blob, want_f) in &blobs {
+        let lf = LikelihoodField::new(
+            FieldView::parse(blob).unwrap(),
+            LikelihoodParams::amcl_defaults(z_max).unwrap(),
+        );
+        let prep = lf.prepare(&layout, &scan);
+        assert_eq!(prep.frac_bits(), *want_f);
+        let mut t = Tally::default();
+        for (along_y, sign) in [(false, 1.0), (false, -1.0), (true, 1.0), (true, -1.0)] {
+            let edge = fixed_point_edge(&prep, along_y, sign);
+            for k in 0..16 {
+                let theta = (f64::from(k) / 16.0 * std::f64::consts::TAU - 3.0) as f32;
+                let (x, y) = if along_y { (0.0, edge) } else { (edge, 0.0) };
+                let pose = Pose::new(x as f32, y as f32, theta);
+                assert!(prep.uses_fixed_point(&pose));
+                compare(&lf, &prep, &layout, &scan, &pose, Stride::ONE, &mut t);
+            }
+        }
+        assert_eq!(t.fallback_poses, 0);
+        assert!((t.differing as f64) <= t.bound);
+
+        // Where wrapping integers would read the map again.
+        let view = lf.view();
+        let (w, h) = (u64::from(view.width()), u64::from(view.height()));
+        let cell = f64::from(view.cell_size_m());
+        let hd = view.header();
+        let at_cell = |cx: f64, cy: f64| {
+            (
+                (f64::from(hd.origin_x_m) + (cx + 0.5) * cell) as f32,
+                (f64::from(hd.origin_y_m) + (cy + 0.5) * cell) as f32,
+            )
+        };
+        let period = f64::from(1u32 << (32 - prep.frac_bits()));
+        // The first row above the map whose u32 index wraps into the map's first row.
+        let wrap_row = (1..=u64::from(u32::MAX))
+            .find(|&r| (r * w) % (1 << 32) < w / 2)
+            .unwrap();
+        let places = [
+            at_cell(period + (w / 2) as f64, (h / 2) as f64),
+            at_cell((w / 2) as f64 - period, (h / 2) as f64),
+            at_cell((w / 2) as f64, period + (h / 2) as f64),
+            at_cell(10.0, wrap_row as f64),
+        ];
+        let before = t.fallback_poses;
+        for (x, y) in places {
+            for theta in [0.0f32, 0.4, 1.6, 3.1, -1.6] {
+                compare(
+                    &lf,
+                    &prep,
+                    &layout,
+                    &scan,
+                    &Pose::new(x, y, theta),
+                    Stride::ONE,
+                    &mut t,
+                );
+            }
+        }
+        assert_eq!(t.fallback_poses - before, places.len() * 5);
+    }
+}
