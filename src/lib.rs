@@ -43,5 +43,6 @@ pub use pose::{wrap_angle, Pose, SensorMount};
 pub use raycast::{CastTrace, RayCastError, RayCaster};
 pub use scan::{Beam, BeamLayout, Reading, Scan, ScanError, ScanScore};
 pub use tempered::{
-    effective_sample_size, normalize_log_weights, NormalizeError, Normalized, TemperError, Tempered,
+    effective_sample_size, normalize_log_weights, NormalizeError, Normalized, TemperError,
+    Tempered, TemperedScan,
 };

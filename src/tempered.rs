@@ -10,6 +10,7 @@
 //! [`normalize_log_weights`] turns the log-likelihoods of a set of hypotheses into normalized
 //! weights in place, with a max-shifted log-sum-exp: never NaN, never all zero.
 
+use crate::field::{LikelihoodField, PreparedScan};
 use crate::math;
 use crate::model::{SensorModel, Stride};
 use crate::pose::Pose;
@@ -111,6 +112,47 @@ impl<M: SensorModel<N>, const N: usize> SensorModel<N> for Tempered<M> {
         let mut s = self.inner.score_strided(layout, scan, pose, combined);
         s.log_likelihood *= self.inv_kappa;
         s
+    }
+}
+
+impl<'a> Tempered<LikelihoodField<'a>> {
+    /// Prepares `scan` (read against `layout`) for scoring at many poses with the tempered
+    /// likelihood field ([`TemperedScan::score`]): the wrapper's stride is applied once here
+    /// ([`LikelihoodField::prepare_strided`]) and `1/κ` at every score. The result is
+    /// [`SensorModel::score`] of this wrapper, up to the rare beams whose endpoint the prepared
+    /// path puts in the neighbouring cell (see [`PreparedScan`]).
+    pub fn prepare<const N: usize>(
+        &self,
+        layout: &BeamLayout<N>,
+        scan: &Scan<N>,
+    ) -> TemperedScan<'_, N> {
+        TemperedScan {
+            prepared: self.inner.prepare_strided(layout, scan, self.stride),
+            inv_kappa: self.inv_kappa,
+        }
+    }
+}
+
+/// A scan prepared for the tempered likelihood field: a [`PreparedScan`] over the wrapper's
+/// stride, and `1/κ`. Built by [`Tempered::prepare`].
+#[derive(Clone, Debug)]
+pub struct TemperedScan<'f, const N: usize> {
+    prepared: PreparedScan<'f, N>,
+    inv_kappa: f32,
+}
+
+impl<const N: usize> TemperedScan<'_, N> {
+    /// Tempered log-likelihood (nats, divided by κ) of the prepared scan with the robot at
+    /// `pose`; the counts are the prepared scan's (beams kept by the stride only).
+    pub fn score(&self, pose: &Pose) -> ScanScore {
+        let mut s = self.prepared.score(pose);
+        s.log_likelihood *= self.inv_kappa;
+        s
+    }
+
+    /// The untempered prepared scan (its scores are not divided by κ).
+    pub fn prepared(&self) -> &PreparedScan<'_, N> {
+        &self.prepared
     }
 }
 

@@ -405,3 +405,68 @@ fn poses_at_the_edge_of_the_fixed_point_region_agree_with_score() {
         assert_eq!(t.fallback_poses - before, places.len() * 5);
     }
 }
+
+/// `Tempered::prepare`: the wrapper's stride is applied at preparation and 1/κ at every score,
+/// so a `TemperedScan` scores exactly `PreparedScan::score` over the stride times `1/κ`, and
+/// equals the wrapper's own `SensorModel::score` wherever the untempered paths agree bit for
+/// bit (no beam in a neighbouring cell).
+#[test]
+fn tempered_prepare_matches_the_tempered_model() {
+    use beamfield::{SensorModel, Tempered};
+    let log = intel();
+    let z_max = log.max_range.value_m().unwrap();
+    let layout: BeamLayout<N> = log.layout().unwrap();
+    let blob = blob_of("map_turtlebot3_world/map.yaml");
+    let lf = LikelihoodField::new(
+        FieldView::parse(&blob).unwrap(),
+        LikelihoodParams::amcl_defaults(z_max).unwrap(),
+    );
+    let mut rng = Rng(5);
+    let (mut equal, mut poses) = (0usize, 0usize);
+    for (kappa, stride) in [(1.0f32, 1usize), (8.25, 1), (4.0, 3)] {
+        let tempered = Tempered::new(lf.clone(), kappa, stride).unwrap();
+        for i in [40usize, 300, 610] {
+            let scan = log.scans[i].to_scan::<N>().unwrap();
+            let ts = tempered.prepare(&layout, &scan);
+            let plain = lf.prepare_strided(&layout, &scan, Stride::new(stride).unwrap());
+            assert_eq!(ts.prepared().len(), plain.len());
+            for _ in 0..30 {
+                let pose = Pose::new(
+                    ((rng.next() * 2.0 - 1.0) * 1.5) as f32,
+                    ((rng.next() * 2.0 - 1.0) * 1.5) as f32,
+                    ((rng.next() - 0.5) * std::f64::consts::TAU) as f32,
+                );
+                let t = ts.score(&pose);
+                let p = plain.score(&pose);
+                // `Tempered` multiplies by its stored `1/κ` (not a division by κ).
+                assert_eq!(
+                    t.log_likelihood.to_bits(),
+                    (p.log_likelihood * (1.0 / kappa)).to_bits()
+                );
+                assert_eq!(
+                    (t.scored, t.max_range, t.invalid),
+                    (p.scored, p.max_range, p.invalid)
+                );
+                let m = tempered.score(&layout, &scan, &pose);
+                assert_eq!(
+                    (m.scored, m.max_range, m.invalid),
+                    (t.scored, t.max_range, t.invalid)
+                );
+                let untempered = lf.score_strided_with(
+                    &layout,
+                    &scan,
+                    &pose,
+                    Stride::new(stride).unwrap(),
+                    |_, _| {},
+                );
+                if untempered.log_likelihood.to_bits() == p.log_likelihood.to_bits() {
+                    assert_eq!(m.log_likelihood.to_bits(), t.log_likelihood.to_bits());
+                    equal += 1;
+                }
+                poses += 1;
+            }
+        }
+    }
+    // Most poses have no beam in a neighbouring cell.
+    assert!(equal * 10 >= poses * 9, "{equal} of {poses}");
+}

@@ -22,7 +22,7 @@
 
 use beamfield::{
     normalize_log_weights, BeamLayout, FieldView, Lag1, LikelihoodField, LikelihoodParams, Pose,
-    Scan, SensorMount, Stride, Tempered,
+    Scan, SensorMount, Tempered,
 };
 use beamfield_firmware::{exit, println, Fixed};
 use cortex_m::peripheral::syst::SystClkSource;
@@ -205,21 +205,18 @@ fn main() -> ! {
             all_ok = false;
             continue;
         };
-        // The scan is prepared once (max-range readings dropped, endpoints in the robot frame)
-        // and scored at every hypothesis; the tempering is `Tempered`'s: the inner score over
-        // its stride, times the same `1/κ`. Timed pose by pose (the preparation is included
-        // in the first pose): a whole scan's scoring would wrap the 24-bit SysTick counter on
-        // a 168 MHz board; one pose never does.
-        let inv_kappa = 1.0 / tempered.kappa();
-        let stride = Stride::new(tempered.stride()).unwrap_or(Stride::ONE);
+        // The scan is prepared once (max-range readings dropped, endpoints in the robot frame,
+        // `Tempered`'s stride applied) and scored at every hypothesis, divided by κ. Timed pose
+        // by pose (the preparation is included in the first pose): a whole scan's scoring would
+        // wrap the 24-bit SysTick counter on a 168 MHz board; one pose never does.
         let t0 = cortex_m::peripheral::SYST::get_current();
-        let prepared = tempered.inner().prepare_strided(&layout, &scan, stride);
+        let prepared = tempered.prepare(&layout, &scan);
         let t1 = cortex_m::peripheral::SYST::get_current();
         let mut ticks = u64::from(ticks_between(t0, t1));
         for (i, w) in weights.iter_mut().enumerate() {
             let pose = hypothesis(&logged, i);
             let t0 = cortex_m::peripheral::SYST::get_current();
-            *w = prepared.score(&pose).log_likelihood * inv_kappa;
+            *w = prepared.score(&pose).log_likelihood;
             let t1 = cortex_m::peripheral::SYST::get_current();
             ticks += u64::from(ticks_between(t0, t1));
         }
