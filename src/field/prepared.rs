@@ -250,8 +250,13 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
             w: view.width(),
             ax: round_to_i32(ax * scale),
             ay: round_to_i32(ay * scale),
-            nc: c.wrapping_neg(),
+            #[cfg(not(target_arch = "arm"))]
+            c,
             s,
+            #[cfg(target_arch = "arm")]
+            nc: c.wrapping_neg(),
+            #[cfg(not(target_arch = "arm"))]
+            ns: s.wrapping_neg(),
         };
         let points: &[[i32; 2]] = &self.points;
         let n = points.len();
@@ -332,9 +337,15 @@ struct FixedPose<'a> {
     /// The robot's grid position, cells, with `f` fractional bits.
     ax: i32,
     ay: i32,
-    /// Minus the cosine and the sine of the robot's heading, Q2.30 (see [`FixedPose::grid`]).
-    nc: i32,
+    /// The cosine and sine of the robot's heading, Q2.30, and the negatives the target's form
+    /// of [`FixedPose::grid`] uses (`|c|, |s| ≤ 2^30`, so negation is exact).
+    #[cfg(not(target_arch = "arm"))]
+    c: i32,
     s: i32,
+    #[cfg(target_arch = "arm")]
+    nc: i32,
+    #[cfg(not(target_arch = "arm"))]
+    ns: i32,
 }
 
 impl FixedPose<'_> {
@@ -342,17 +353,30 @@ impl FixedPose<'_> {
     /// fractional bits): rotation and translation as four "multiply, keep the high word, add
     /// or subtract" operations. The limits of the fast path keep these sums in range.
     ///
-    /// With `c = −nc`: `gx = ax + ⌊c·x/2^32⌋ − ⌈s·y/2^32⌉` and
-    /// `gy = ay + ⌊s·x/2^32⌋ + ⌊c·y/2^32⌋`. The `⌊c·…⌋` terms are written as subtractions of
-    /// `nc·…` (`a − ⌈−t⌉ = a + ⌊t⌋`, exactly), so that each coordinate is a chain of two
-    /// accumulating multiplies (`smmla`/`smmls`) with the translation as the first accumulator,
-    /// and only two rotation values are live in the loop. A plain `ay + hi(s·x) + hi(c·y)` was
-    /// reassociated by LLVM into three instructions (`smmul`, `smmla`, `add`).
+    /// `gx = ax + ⌊c·x/2^32⌋ − ⌈s·y/2^32⌉` and `gy = ay + ⌊s·x/2^32⌋ + ⌊c·y/2^32⌋`, wrapping
+    /// (mod 2^32). For any `a ≠ i32::MIN`, [`mul_hi_sub`]`(acc, a, b)` and
+    /// [`mul_hi_add`]`(acc, −a, b)` are the same number: both are `acc + ⌊−a·b/2^32⌋` mod 2^32
+    /// (the i64 form may wrap, which changes its high word by a multiple of 2^32 only). So the
+    /// two spellings below give identical bits; each is the shorter one for its target:
+    ///
+    /// - Arm: a chain of two accumulating multiplies per coordinate (`smmla`/`smmls`) with the
+    ///   translation as the first accumulator, reading only `nc` and `s`. Written as two
+    ///   additions, LLVM reassociated `gy` into three instructions (`smmul`, `smmla`, `add`).
+    /// - Elsewhere (x86-64): only additions of high words (multiply, shift, add), reading `c`,
+    ///   `s` and `ns`; the subtraction form costs a shift and a mask more per term there.
     #[inline(always)]
     fn grid(&self, p: &[i32; 2]) -> (i32, i32) {
         let (x, y) = (p[0], p[1]);
-        let gx = mul_hi_sub(mul_hi_sub(self.ax, self.nc, x), self.s, y);
-        let gy = mul_hi_sub(mul_hi_add(self.ay, self.s, x), self.nc, y);
+        #[cfg(target_arch = "arm")]
+        let (gx, gy) = (
+            mul_hi_sub(mul_hi_sub(self.ax, self.nc, x), self.s, y),
+            mul_hi_sub(mul_hi_add(self.ay, self.s, x), self.nc, y),
+        );
+        #[cfg(not(target_arch = "arm"))]
+        let (gx, gy) = (
+            mul_hi_add(mul_hi_add(self.ax, self.c, x), self.ns, y),
+            mul_hi_add(mul_hi_add(self.ay, self.s, x), self.c, y),
+        );
         (gx, gy)
     }
 
@@ -434,7 +458,8 @@ fn mul_hi_add(acc: i32, a: i32, b: i32) -> i32 {
 }
 
 /// `acc − ceil(a·b / 2^32)`, i.e. `floor((acc·2^32 − a·b) / 2^32)`: the 64-bit difference's
-/// high word (`smmls` on a Cortex-M4).
+/// high word (`smmls` on a Cortex-M4). Used on Arm only (see [`FixedPose::grid`]).
+#[cfg(any(target_arch = "arm", test))]
 #[inline(always)]
 fn mul_hi_sub(acc: i32, a: i32, b: i32) -> i32 {
     (((i64::from(acc) << 32).wrapping_sub(i64::from(a) * i64::from(b))) >> 32) as i32
@@ -483,4 +508,61 @@ fn round_to_i32(v: f32) -> i32 {
 
 fn sat16<T: TryInto<u16>>(n: T) -> u16 {
     n.try_into().unwrap_or(u16::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{mul_hi_add, mul_hi_sub};
+
+    /// The identity [`super::FixedPose::grid`] relies on: subtracting the high word of `a·b`
+    /// (rounded up) is adding the high word of `(−a)·b` (rounded down), bit for bit, for every
+    /// accumulator (wrapping included) and `|a| ≤ 2^30`; so the Arm and the other spelling of
+    /// the grid point agree.
+    #[test]
+    fn subtracting_is_adding_the_negated_product() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let edges = [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX - 1, i32::MAX];
+        let a_edges = [-(1 << 30), -(1 << 30) + 1, -1, 0, 1, (1 << 30) - 1, 1 << 30];
+        for round in 0..200_000u32 {
+            let r = next();
+            let acc = if round % 7 == 0 {
+                edges[(r % 7) as usize]
+            } else {
+                r as i32
+            };
+            let a = if round % 5 == 0 {
+                a_edges[((r >> 8) % 7) as usize]
+            } else {
+                ((r >> 16) as i32) >> 1
+            };
+            let b = if round % 3 == 0 {
+                edges[((r >> 24) % 7) as usize]
+            } else {
+                (r >> 32) as i32
+            };
+            assert_eq!(
+                mul_hi_sub(acc, a, b),
+                mul_hi_add(acc, -a, b),
+                "{acc} {a} {b}"
+            );
+            // The two spellings of a grid point (x on the left, y on the right).
+            let (c, s) = (a, ((r >> 3) as i32) >> 1);
+            let (x, y) = (b, (r >> 40) as i32);
+            let arm = (
+                mul_hi_sub(mul_hi_sub(acc, -c, x), s, y),
+                mul_hi_sub(mul_hi_add(acc, s, x), -c, y),
+            );
+            let other = (
+                mul_hi_add(mul_hi_add(acc, c, x), -s, y),
+                mul_hi_add(mul_hi_add(acc, s, x), c, y),
+            );
+            assert_eq!(arm, other, "{acc} {c} {s} {x} {y}");
+        }
+    }
 }
