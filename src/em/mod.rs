@@ -435,12 +435,10 @@ where
     let mut proposal_from: Option<Saved<G>> = None;
     let (stop, last) = loop {
         let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
-        let probe = if exact {
-            Probe::at(1.0 / (sigma * sigma), lambda)
-        } else if truncated {
+        let probe = if truncated {
             // The one-step update needs only the derivatives; the fallback re-evaluates the
-            // value if it is ever needed.
-            Probe::derivatives_at(1.0 / (sigma * sigma), lambda)
+            // values if it is ever needed.
+            Probe::at_theta(sigma, lambda, exact)
         } else {
             Probe::default()
         };
@@ -457,7 +455,7 @@ where
                 // step from the previous parameters instead (guaranteed not to lower it). Its
                 // start needs the shape terms' values at the previous σ, λ, which the one-step
                 // pass did not compute: one more pass at the previous θ (same E-step).
-                let first = run(&prev.theta, &Probe::at(tau_of(prev.sigma), prev.lambda));
+                let first = run(&prev.theta, &Probe::at_theta(prev.sigma, prev.lambda, true));
                 let (s, l, extra) = newton_shapes(
                     config,
                     &run,

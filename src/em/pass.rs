@@ -89,15 +89,18 @@ impl<const G: usize> Theta<G> {
 pub(crate) struct Probe {
     hit: Option<HitProbe>,
     short: Option<ShortProbe>,
-    /// Whether the value of the short term (`Curve[0]` of [`PassStats::short_curve`]) is wanted.
-    /// Without it the pass skips one `ln` per short-range reading and leaves that entry 0; the
-    /// derivatives are always computed.
-    short_value: bool,
+    /// Whether the values of the terms (`Curve[0]` of [`PassStats::hit_curve`] and
+    /// [`PassStats::short_curve`]) are wanted. Without them the pass skips one `ln` per
+    /// short-range reading and one per hit reading near a truncation end, and leaves those
+    /// entries 0; the derivatives are always computed.
+    values: bool,
 }
 /// Constants of a hit probe at precision `τ = 1/σ²` (1/m²).
 #[derive(Clone, Copy, Debug)]
 struct HitProbe {
     tau: f64,
+    /// `√τ = 1/σ`; when it equals [`Theta::inv_sigma`] bit for bit, the probe's truncation
+    /// mass is the E-step's (same formula, same operands) and is not recomputed.
     sqrt_tau: f64,
     half_ln_tau: f64,
     inv_2tau: f64,
@@ -113,38 +116,48 @@ struct ShortProbe {
     inv_lambda2: f64,
 }
 
+impl HitProbe {
+    fn new(tau: f64, sqrt_tau: f64) -> Self {
+        Self {
+            tau,
+            sqrt_tau,
+            half_ln_tau: 0.5 * math::ln_f64(tau),
+            inv_2tau: 0.5 / tau,
+            inv_4tau2: 0.25 / (tau * tau),
+        }
+    }
+}
+
 impl Probe {
-    /// A probe at `τ` (if any) and `λ` (if any).
+    /// A probe at `τ` (if any) and `λ` (if any), with the values.
     pub fn new(tau: Option<f64>, lambda: Option<f64>) -> Self {
         Self {
-            hit: tau.map(|tau| HitProbe {
-                tau,
-                sqrt_tau: math::sqrt_f64(tau),
-                half_ln_tau: 0.5 * math::ln_f64(tau),
-                inv_2tau: 0.5 / tau,
-                inv_4tau2: 0.25 / (tau * tau),
-            }),
-            short: lambda.map(|lambda| ShortProbe {
-                lambda,
-                ln_lambda: math::ln_f64(lambda),
-                inv_lambda: 1.0 / lambda,
-                inv_lambda2: 1.0 / (lambda * lambda),
-            }),
-            short_value: true,
+            hit: tau.map(|tau| HitProbe::new(tau, math::sqrt_f64(tau))),
+            short: lambda.map(ShortProbe::new),
+            values: true,
         }
     }
 
-    /// A probe at both `τ` and `λ`.
-    pub fn at(tau: f64, lambda: f64) -> Self {
-        Self::new(Some(tau), Some(lambda))
-    }
-
-    /// A probe at both `τ` and `λ` that needs only the derivatives of the short term, not its
-    /// value (the one-step update of [`super::ShapeUpdate::Truncated`]).
-    pub fn derivatives_at(tau: f64, lambda: f64) -> Self {
+    /// A probe at the E-step's own `σ` (metres, as [`Theta`] holds it: `τ = 1/σ²`,
+    /// `√τ = 1/σ` computed as [`Theta::new`] does, so the pass shares the truncation mass) and
+    /// `λ` (1/m, which shares the short normalizer). `values`: see [`Probe::values`]; the
+    /// one-step update of [`super::ShapeUpdate::Truncated`] needs only the derivatives.
+    pub fn at_theta(sigma: f64, lambda: f64, values: bool) -> Self {
         Self {
-            short_value: false,
-            ..Self::at(tau, lambda)
+            hit: Some(HitProbe::new(1.0 / (sigma * sigma), 1.0 / sigma)),
+            short: Some(ShortProbe::new(lambda)),
+            values,
+        }
+    }
+}
+
+impl ShortProbe {
+    fn new(lambda: f64) -> Self {
+        Self {
+            lambda,
+            ln_lambda: math::ln_f64(lambda),
+            inv_lambda: 1.0 / lambda,
+            inv_lambda2: 1.0 / (lambda * lambda),
         }
     }
 }
@@ -231,7 +244,9 @@ impl<const G: usize> PassStats<G> {
         if let Some(hp) = &probe.hit {
             let [e, sq] = self.hit_interior;
             // Σ e·(½ln τ − τd²/2), Σ e·(−d²/2 + 1/(2τ)), Σ e·(−2/(4τ²)): E[u²] = 1, E[u⁴] = 3.
-            self.hit_curve[0] += hp.half_ln_tau * e - 0.5 * hp.tau * sq;
+            if probe.values {
+                self.hit_curve[0] += hp.half_ln_tau * e - 0.5 * hp.tau * sq;
+            }
             self.hit_curve[1] += -0.5 * sq + hp.inv_2tau * e;
             self.hit_curve[2] += -2.0 * hp.inv_4tau2 * e;
         }
@@ -365,7 +380,13 @@ impl<const G: usize> PassStats<G> {
                     self.hit_interior[0] += e_hit;
                     self.hit_interior[1] += e_hit * d * d;
                 } else {
-                    let c = hit_curve(hp, d, s, th.zmax);
+                    // The E-step's mass when the probe is at θ's σ (see HitProbe::sqrt_tau).
+                    let m = if hp.sqrt_tau == th.inv_sigma {
+                        mass
+                    } else {
+                        hit_mass(s, th.zmax, hp.sqrt_tau)
+                    };
+                    let c = hit_curve(hp, d, s, th.zmax, m, probe.values);
                     for (a, b) in self.hit_curve.iter_mut().zip(c) {
                         *a += e_hit * b;
                     }
@@ -378,7 +399,7 @@ impl<const G: usize> PassStats<G> {
                     Some(sn) if sp.lambda == th.lambda => sn,
                     _ => ShortNorm::new(sp.lambda, s),
                 };
-                let c = short_curve(sp, z, s, &norm, probe.short_value);
+                let c = short_curve(sp, z, s, &norm, probe.values);
                 for (a, b) in self.short_curve.iter_mut().zip(c) {
                     *a += e_short * b;
                 }
@@ -462,21 +483,27 @@ fn hit_curve_interior(hp: &HitProbe, s: f64, zmax: f64) -> bool {
 /// with `u` a standard normal truncated to `[α, β]`:
 /// `E[u²] = 1 − (βφ(β) − αφ(α))/M`, `E[u⁴] = 3·E[u²] − (β³φ(β) − α³φ(α))/M`. The truncated
 /// normal with a fixed mean is an exponential family along τ, which is why ℓ is concave in τ.
+///
+/// `mass` is `M(τ)`, [`hit_mass`] at `(s, zmax, hp.sqrt_tau)`. Without `value` the first entry
+/// is 0 (and no `ln` is taken).
 #[inline]
-fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64) -> Curve {
+fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64, mass: f64, value: bool) -> Curve {
     let (tau, rt) = (hp.tau, hp.sqrt_tau);
     let alpha = -s * rt;
     let beta = (zmax - s) * rt;
-    let mass = half_mass(beta) + half_mass(-alpha);
     let (a1, a3) = phi_terms(alpha);
     let (b1, b3) = phi_terms(beta);
-    let (ln_mass, eu2, eu4) = if mass == 1.0 && a1 == 0.0 && b1 == 0.0 {
-        (0.0, 1.0, 3.0)
+    let (eu2, eu4) = if mass == 1.0 && a1 == 0.0 && b1 == 0.0 {
+        (1.0, 3.0)
     } else {
         let eu2 = 1.0 - (b1 - a1) / mass;
-        (math::ln_f64(mass), eu2, 3.0 * eu2 - (b3 - a3) / mass)
+        (eu2, 3.0 * eu2 - (b3 - a3) / mass)
     };
-    let q = hp.half_ln_tau - 0.5 * tau * d * d - ln_mass;
+    let q = if value {
+        hp.half_ln_tau - 0.5 * tau * d * d - ln_of_mass(mass)
+    } else {
+        0.0
+    };
     let g = -0.5 * d * d + eu2 * hp.inv_2tau;
     let h = -(eu4 - eu2 * eu2) * hp.inv_4tau2;
     [q, g, h]
@@ -593,7 +620,7 @@ mod tests {
             for i in 0..=3_000 {
                 let s = zmax * f64::from(i) / 3_000.0;
                 let d = 0.37 * sigma - 0.001 * f64::from(i % 7);
-                let full = hit_curve(&hp, d, s, zmax);
+                let full = hit_curve(&hp, d, s, zmax, hit_mass(s, zmax, hp.sqrt_tau), true);
                 if hit_curve_interior(&hp, s, zmax) {
                     interior += 1;
                     let closed = [
