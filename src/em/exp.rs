@@ -48,7 +48,10 @@ pub(crate) fn exp(x: f64) -> f64 {
     if !inline {
         return math::exp_f64(x);
     }
-    let kf = (x * LOG2E + ROUND_SHIFT) - ROUND_SHIFT;
+    // t = 1.5·2⁵² + k exactly (|k| ≤ 1022): an f64 in [2⁵², 2⁵³), whose fraction bits are
+    // 2⁵¹ + k, so the low 12 bits of t's bits + 1023 are k + 1023 (no carry leaves them).
+    let t = x * LOG2E + ROUND_SHIFT;
+    let kf = t - ROUND_SHIFT;
     let r = (x - kf * LN2_HI) - kf * LN2_LO;
     let r2 = r * r;
     let r4 = r2 * r2;
@@ -59,9 +62,40 @@ pub(crate) fn exp(x: f64) -> f64 {
         + r4 * ((C6 + r * C7) + r2 * (C8 + r * C9))
         + r8 * ((C10 + r * C11) + r2 * (C12 + r * C13));
     let p = 1.0 + (r + r2 * q);
-    // |kf| ≤ 1022 here, so the biased exponent kf + 1023 is in 1..=2045: a normal 2^kf.
-    let scale = f64::from_bits(((kf as i64 + 1023) as u64) << 52);
+    // |k| ≤ 1022 here, so the biased exponent k + 1023 is in 1..=2045: a normal 2^k, built
+    // from t's bits (shifting left by 52 keeps exactly those 12 low bits; no float-to-int
+    // conversion).
+    let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
     p * scale
+}
+
+/// `[e^a, e^b]`: the same operations as [`exp`] on two lanes side by side (bit for bit the
+/// same results), written so that the compiler can keep both lanes in one SIMD register.
+#[inline]
+pub(crate) fn exp_pair([a, b]: [f64; 2]) -> [f64; 2] {
+    if !(a.abs() <= FAST_LIMIT && b.abs() <= FAST_LIMIT) {
+        return [exp(a), exp(b)];
+    }
+    let x = [a, b];
+    let t = x.map(|x| x * LOG2E + ROUND_SHIFT);
+    let kf = t.map(|t| t - ROUND_SHIFT);
+    let r = [
+        (x[0] - kf[0] * LN2_HI) - kf[0] * LN2_LO,
+        (x[1] - kf[1] * LN2_HI) - kf[1] * LN2_LO,
+    ];
+    let lane = |r: f64| {
+        let r2 = r * r;
+        let r4 = r2 * r2;
+        let r8 = r4 * r4;
+        let q = (C2 + r * C3)
+            + r2 * (C4 + r * C5)
+            + r4 * ((C6 + r * C7) + r2 * (C8 + r * C9))
+            + r8 * ((C10 + r * C11) + r2 * (C12 + r * C13));
+        1.0 + (r + r2 * q)
+    };
+    let p = r.map(lane);
+    let scale = t.map(|t| f64::from_bits(t.to_bits().wrapping_add(1023) << 52));
+    [p[0] * scale[0], p[1] * scale[1]]
 }
 
 /// `e^x − 1` for `x ≥ 0`. From `x ≥ ln 2` on, `e^x ≥ 2` and subtracting 1 loses no accuracy
@@ -115,6 +149,30 @@ mod tests {
         assert_eq!(exp(-746.0), 0.0);
         assert_eq!(exp(-709.0).to_bits(), libm::exp(-709.0).to_bits());
         assert!(exp(f64::NAN).is_nan());
+    }
+
+    /// [`exp_pair`] is [`exp`] on each lane, bit for bit, inside and outside the inline range
+    /// (the lanes are independent: every pairing of a grid of arguments).
+    #[test]
+    fn exp_pair_is_exp_per_lane() {
+        let mut xs: Vec<f64> = (0..=4_000)
+            .map(|i| -720.0 + 1_440.0 * f64::from(i) / 4_000.0)
+            .collect();
+        xs.extend([0.0, -0.0, 1e-300, 708.0, -708.0, 709.5, -745.0, f64::NAN]);
+        let mut checked = 0u64;
+        for (i, &a) in xs.iter().enumerate() {
+            for &b in xs.iter().skip(i % 97).step_by(97) {
+                let [ea, eb] = exp_pair([a, b]);
+                for (got, want) in [(ea, exp(a)), (eb, exp(b))] {
+                    assert!(
+                        got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                        "exp_pair([{a}, {b}])"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 100_000, "{checked}");
     }
 
     /// Within 2 ulp of libm's `expm1` from ln 2 on, identical below.

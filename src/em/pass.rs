@@ -305,7 +305,7 @@ impl<const G: usize> PassStats<G> {
         // The short normalizer at θ's λ, shared with the short probe when that is at the same λ
         // (the E-step pass of the truncated updates).
         let short_norm = if short_ok {
-            Some(ShortNorm::new(th.lambda, s))
+            Some(ShortNorm::with_density(th.lambda, s, z))
         } else {
             None
         };
@@ -320,7 +320,7 @@ impl<const G: usize> PassStats<G> {
             lin_w[0] * exp::exp(-half_u2) / mass
         };
         let p_short = match &short_norm {
-            Some(sn) => lin_w[1] * exp::exp(-th.lambda * z) * sn.inv_one_minus(),
+            Some(sn) => lin_w[1] * sn.exp_neg_lambda_z * sn.inv_one_minus(),
             None => 0.0,
         };
         let (p_max, p_rand) = if is_max {
@@ -543,6 +543,8 @@ fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm, value: bool) -
 struct ShortNorm {
     em1: f64,
     inv_em1: f64,
+    /// `e^{−λz}` for the E-step's short density (only from [`ShortNorm::with_density`]).
+    exp_neg_lambda_z: f64,
 }
 
 impl ShortNorm {
@@ -552,6 +554,26 @@ impl ShortNorm {
         Self {
             em1,
             inv_em1: 1.0 / em1,
+            exp_neg_lambda_z: 0.0,
+        }
+    }
+
+    /// [`ShortNorm::new`] and `e^{−λz}` for a reading `z ≤ s`. Where `e^{λs} − 1` is `e^{λs}`
+    /// minus 1 (`λs ≥ ln 2`, see [`exp::expm1_nonneg`]) the two exponentials are one
+    /// [`exp::exp_pair`], with the same results.
+    #[inline]
+    fn with_density(lambda: f64, s: f64, z: f64) -> Self {
+        let x = lambda * s;
+        let (em1, e) = if x >= core::f64::consts::LN_2 {
+            let [ex, e] = exp::exp_pair([x, -lambda * z]);
+            (ex - 1.0, e)
+        } else {
+            (exp::expm1_nonneg(x), exp::exp(-lambda * z))
+        };
+        Self {
+            em1,
+            inv_em1: 1.0 / em1,
+            exp_neg_lambda_z: e,
         }
     }
 
