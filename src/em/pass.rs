@@ -51,6 +51,8 @@ pub(crate) struct Theta<const G: usize> {
     pub zmax_f32: f32,
     /// `−ln z_max`.
     pub ln_inv_zmax: f64,
+    /// `z*` strictly between these (metres) has a hit mass of exactly 1: see [`mass_one_margin`].
+    pub mass_one: (f64, f64),
 }
 
 impl<const G: usize> Theta<G> {
@@ -79,6 +81,10 @@ impl<const G: usize> Theta<G> {
             zmax,
             zmax_f32: zmax_m,
             ln_inv_zmax: -math::ln_f64(zmax),
+            mass_one: {
+                let m = mass_one_margin(sigma);
+                (m, zmax - m)
+            },
         }
     }
 }
@@ -99,6 +105,9 @@ pub(crate) struct Probe {
 #[derive(Clone, Copy, Debug)]
 struct HitProbe {
     tau: f64,
+    /// `10·(1 + 10⁻⁶)/√τ`, metres: a `z*` farther than this from both ends is interior (see
+    /// [`hit_curve_interior`]).
+    interior_margin: f64,
     /// `√τ = 1/σ`; when it equals [`Theta::inv_sigma`] bit for bit, the probe's truncation
     /// mass is the E-step's (same formula, same operands) and is not recomputed.
     sqrt_tau: f64,
@@ -120,6 +129,7 @@ impl HitProbe {
     fn new(tau: f64, sqrt_tau: f64) -> Self {
         Self {
             tau,
+            interior_margin: 10.0 * (1.0 + 1e-6) / sqrt_tau,
             sqrt_tau,
             half_ln_tau: 0.5 * math::ln_f64(tau),
             inv_2tau: 0.5 / tau,
@@ -300,7 +310,12 @@ impl<const G: usize> PassStats<G> {
         let d = z - s;
         let u = d * th.inv_sigma;
         let half_u2 = 0.5 * u * u;
-        let mass = hit_mass(s, th.zmax, th.inv_sigma);
+        // Exactly 1 inside the interval (see mass_one_margin): no products, no erf tests.
+        let mass = if s > th.mass_one.0 && s < th.mass_one.1 {
+            1.0
+        } else {
+            hit_mass(s, th.zmax, th.inv_sigma)
+        };
         let short_ok = s > 0.0 && z <= s;
         // The short normalizer at θ's λ, shared with the short probe when that is at the same λ
         // (the E-step pass of the truncated updates).
@@ -420,6 +435,18 @@ fn fold_density(mant: &mut f64, exp: &mut i64, p: f64) {
     *mant = f64::from_bits((bits & MANTISSA_BITS) | ONE_BITS);
 }
 
+/// Distance from an end of `[0, z_max]` (metres) beyond which [`hit_mass`] is exactly 1 for a
+/// `z*` at that distance from both ends, with the computed operands: `6·√2·σ·(1 + 10⁻⁶)`.
+/// Proof: the computed `y = (x·(1/σ))·(1/√2)` in [`half_mass`] carries at most 4 roundings of
+/// relative size 2⁻⁵³ (`1/σ`, the two products, the constant), and `x = z*` or `z_max − z*` is
+/// exact or one correctly rounded subtraction, so `y > 6·(1 + 10⁻⁶)·(1 − 5·2⁻⁵³) > 6 =`
+/// `ERF_IS_ONE` and both halves are exactly 0.5. The margin (`8.5e-6·σ`) also dwarfs the
+/// rounding of the bounds themselves (≤ 2⁻⁵² z_max, and σ ≥ 10⁻⁶·z_max). Outside the interval
+/// the mass is computed as before, so the shortcut changes no result.
+fn mass_one_margin(sigma: f64) -> f64 {
+    ERF_IS_ONE * core::f64::consts::SQRT_2 * sigma * (1.0 + 1e-6)
+}
+
 /// `½·erf(x/√2)` for `x ≥ 0`: the standard normal mass between 0 and `x`.
 #[inline]
 fn half_mass(x: f64) -> f64 {
@@ -464,11 +491,15 @@ fn phi_terms(x: f64) -> (f64, f64) {
 /// first branch exactly (`x² > 100` zeroes both density terms, and `|x|/√2 > 7.07 > ERF_IS_ONE`
 /// makes the mass exactly 1), so its value is `(½ln τ − τd²/2, −d²/2 + 1/(2τ), −2/(4τ²))`,
 /// linear in `1` and `d²`: the pass sums `e_hit` and `e_hit·d²` instead (no `erf`, no `exp`).
+///
+/// Tested as `z*` and `z_max − z*` both above `10·(1 + 10⁻⁶)/√τ` (two comparisons per reading,
+/// the bound computed once per probe): with at most a few roundings of relative size 2⁻⁵³ in
+/// the bound, the subtraction and the products, that implies the computed `α² > 100` and
+/// `β² > 100` that [`hit_curve`]'s first branch tests. A reading within the margin goes
+/// through [`hit_curve`] itself, whose result there is the same closed form.
 #[inline]
 fn hit_curve_interior(hp: &HitProbe, s: f64, zmax: f64) -> bool {
-    let alpha = -s * hp.sqrt_tau;
-    let beta = (zmax - s) * hp.sqrt_tau;
-    alpha * alpha > 100.0 && beta * beta > 100.0
+    s > hp.interior_margin && zmax - s > hp.interior_margin
 }
 
 /// One reading's hit term of Q as a function of the precision `τ = 1/σ²` (the constant
@@ -628,6 +659,47 @@ mod tests {
         // And the hit mass is exactly 1 once both ends are past the threshold.
         assert_eq!(hit_mass(5.0, 30.0, 1.0 / 0.15).to_bits(), 1.0f64.to_bits());
         assert!(hit_mass(1.0, 30.0, 1.0 / 0.15) < 1.0);
+    }
+
+    /// The interval tests stand for the per-reading formulas they replace: inside
+    /// `Theta::mass_one` the mass is exactly 1, and [`hit_curve_interior`] implies the
+    /// computed `α² > 100 && β² > 100` of [`hit_curve`]; checked densely across both bounds
+    /// for σ over eight decades (down to the 10⁻⁶·z_max floor).
+    #[test]
+    fn interval_shortcuts_imply_the_formulas() {
+        let mut inside = 0u64;
+        for zmax in [2.0f32, 8.0, 30.0, 81.83] {
+            let zmax64 = f64::from(zmax);
+            for rel in [1e-6f32, 1e-5, 1e-3, 0.004, 0.03, 0.1, 0.3] {
+                let sigma = zmax * rel;
+                let th = Theta::<1>::new(&[[0.7, 0.1, 0.1, 0.1]], sigma, 0.5, zmax);
+                let probe = Probe::at_theta(f64::from(sigma), 0.5, true);
+                let hp = probe.hit.unwrap();
+                let (lo, hi) = th.mass_one;
+                let ilo = hp.interior_margin;
+                for base in [lo, hi, ilo, zmax64 - ilo] {
+                    let mut s = base;
+                    let mut t = base;
+                    for _ in 0..3_000 {
+                        for x in [s, t] {
+                            if x > lo && x < hi {
+                                inside += 1;
+                                let m = hit_mass(x, zmax64, th.inv_sigma);
+                                assert_eq!(m.to_bits(), 1.0f64.to_bits(), "{x} {sigma}");
+                            }
+                            if hit_curve_interior(&hp, x, zmax64) {
+                                let a = -x * hp.sqrt_tau;
+                                let b = (zmax64 - x) * hp.sqrt_tau;
+                                assert!(a * a > 100.0 && b * b > 100.0, "{x} {sigma}");
+                            }
+                        }
+                        s = f64::from_bits(s.to_bits() + 1);
+                        t = f64::from_bits(t.to_bits() - 1);
+                    }
+                }
+            }
+        }
+        assert!(inside > 50_000, "{inside}");
     }
 
     /// Where [`hit_curve_interior`] holds, [`hit_curve`] is exactly the closed form that
