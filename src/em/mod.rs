@@ -435,7 +435,9 @@ where
     let mut proposal_from: Option<Saved<G>> = None;
     let (stop, last) = loop {
         let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
-        let probe = if truncated {
+        // After the last M-step the pass only evaluates the result (and checks the last
+        // proposal): no M-step follows it, so it needs no probe.
+        let probe = if truncated && iterations < config.max_iterations {
             // The one-step update needs only the derivatives; the fallback re-evaluates the
             // values if it is ever needed.
             Probe::at_theta(sigma, lambda, exact)
