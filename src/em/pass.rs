@@ -266,8 +266,8 @@ impl<const G: usize> PassStats<G> {
     /// Folds one reading in: E-step at `th`, and the probe's Q terms if asked for.
     ///
     /// The E-step works on the component densities themselves (linear domain): one `exp` for
-    /// the hit density, one `exp` and one `expm1` for the short one (only where `z ≤ z*`), none
-    /// for max and rand, and no `ln` per reading: the reading's density is multiplied into a
+    /// the hit density, one `exp` and one `expm1` for the short one (only where `z ≤ z*`; one
+    /// two-lane [`exp::exp_pair`] where `λz* ≥ ln 2`), none for max and rand, and no `ln` per reading: the reading's density is multiplied into a
     /// running product kept as a mantissa in `[1, 2)` and a binary exponent (exact integer
     /// bookkeeping, so it cannot under- or overflow), and [`PassStats::log_likelihood`] takes one
     /// `ln` per pass. This needs the density total to be a normal number well inside the
