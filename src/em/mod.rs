@@ -47,14 +47,19 @@
 //! # Cost per reading
 //! The E-step works on the component densities, not their logarithms: an inline f64 `e^x`
 //! (within 1 ulp of libm's; no call, no division) for the hit density, and for a reading below
-//! its `z*` one more for the short density and one for its normalizer; the max and rand
+//! its `z*` two more, for the short density and its normalizer, evaluated side by side as the
+//! two lanes of one SIMD-friendly `e^x` (bit for bit the scalar results); the max and rand
 //! densities are constants of the pass. The data log-likelihood is kept as a running product
 //! (mantissa and binary exponent, exact bookkeeping), so there is one `ln` per pass, not per
 //! reading. A reading whose density total is outside `[1e-270, 1e270]` goes through a
 //! log-sum-exp E-step instead, which cannot underflow; the two agree to f64 rounding. The
 //! truncated-Gaussian normalizer skips its `erf` pair where it is exactly 1 in f64 (both ends
-//! more than 8.5 σ away), and so do the probe's hit terms, which there are linear in `1` and
-//! `(z − z*)²` and are summed as two numbers per pass.
+//! more than 8.5 σ away, tested as a `z*` interval fixed per pass with a proved margin), and
+//! so do the probe's hit terms, which there are linear in `1` and `(z − z*)²` and are summed as
+//! two numbers per pass. The one-step pass probes at the E-step's own σ and λ, so it shares the
+//! E-step's truncation mass and short normalizer, and it skips the terms' values (an `ln` each)
+//! because the one-step update uses only their derivatives. The pass after the last M-step has
+//! no probe.
 //!
 //! # Precision
 //! All accumulation and all densities here are f64 (the scoring path of [`crate::BeamModel`] is
@@ -435,12 +440,12 @@ where
     let mut proposal_from: Option<Saved<G>> = None;
     let (stop, last) = loop {
         let th = Theta::new(&w, sigma as f32, lambda as f32, zmax_f32);
-        let probe = if exact {
-            Probe::at(1.0 / (sigma * sigma), lambda)
-        } else if truncated {
+        // After the last M-step the pass only evaluates the result (and checks the last
+        // proposal): no M-step follows it, so it needs no probe.
+        let probe = if truncated && iterations < config.max_iterations {
             // The one-step update needs only the derivatives; the fallback re-evaluates the
-            // value if it is ever needed.
-            Probe::derivatives_at(1.0 / (sigma * sigma), lambda)
+            // values if it is ever needed.
+            Probe::at_theta(sigma, lambda, exact)
         } else {
             Probe::default()
         };
@@ -457,7 +462,7 @@ where
                 // step from the previous parameters instead (guaranteed not to lower it). Its
                 // start needs the shape terms' values at the previous σ, λ, which the one-step
                 // pass did not compute: one more pass at the previous θ (same E-step).
-                let first = run(&prev.theta, &Probe::at(tau_of(prev.sigma), prev.lambda));
+                let first = run(&prev.theta, &Probe::at_theta(prev.sigma, prev.lambda, true));
                 let (s, l, extra) = newton_shapes(
                     config,
                     &run,

@@ -51,6 +51,8 @@ pub(crate) struct Theta<const G: usize> {
     pub zmax_f32: f32,
     /// `−ln z_max`.
     pub ln_inv_zmax: f64,
+    /// `z*` strictly between these (metres) has a hit mass of exactly 1: see [`mass_one_margin`].
+    pub mass_one: (f64, f64),
 }
 
 impl<const G: usize> Theta<G> {
@@ -79,6 +81,10 @@ impl<const G: usize> Theta<G> {
             zmax,
             zmax_f32: zmax_m,
             ln_inv_zmax: -math::ln_f64(zmax),
+            mass_one: {
+                let m = mass_one_margin(sigma);
+                (m, zmax - m)
+            },
         }
     }
 }
@@ -89,15 +95,21 @@ impl<const G: usize> Theta<G> {
 pub(crate) struct Probe {
     hit: Option<HitProbe>,
     short: Option<ShortProbe>,
-    /// Whether the value of the short term (`Curve[0]` of [`PassStats::short_curve`]) is wanted.
-    /// Without it the pass skips one `ln` per short-range reading and leaves that entry 0; the
-    /// derivatives are always computed.
-    short_value: bool,
+    /// Whether the values of the terms (`Curve[0]` of [`PassStats::hit_curve`] and
+    /// [`PassStats::short_curve`]) are wanted. Without them the pass skips one `ln` per
+    /// short-range reading and one per hit reading near a truncation end, and leaves those
+    /// entries 0; the derivatives are always computed.
+    values: bool,
 }
 /// Constants of a hit probe at precision `τ = 1/σ²` (1/m²).
 #[derive(Clone, Copy, Debug)]
 struct HitProbe {
     tau: f64,
+    /// `10·(1 + 10⁻⁶)/√τ`, metres: a `z*` farther than this from both ends is interior (see
+    /// [`hit_curve_interior`]).
+    interior_margin: f64,
+    /// `√τ = 1/σ`; when it equals [`Theta::inv_sigma`] bit for bit, the probe's truncation
+    /// mass is the E-step's (same formula, same operands) and is not recomputed.
     sqrt_tau: f64,
     half_ln_tau: f64,
     inv_2tau: f64,
@@ -113,38 +125,49 @@ struct ShortProbe {
     inv_lambda2: f64,
 }
 
+impl HitProbe {
+    fn new(tau: f64, sqrt_tau: f64) -> Self {
+        Self {
+            tau,
+            interior_margin: 10.0 * (1.0 + 1e-6) / sqrt_tau,
+            sqrt_tau,
+            half_ln_tau: 0.5 * math::ln_f64(tau),
+            inv_2tau: 0.5 / tau,
+            inv_4tau2: 0.25 / (tau * tau),
+        }
+    }
+}
+
 impl Probe {
-    /// A probe at `τ` (if any) and `λ` (if any).
+    /// A probe at `τ` (if any) and `λ` (if any), with the values.
     pub fn new(tau: Option<f64>, lambda: Option<f64>) -> Self {
         Self {
-            hit: tau.map(|tau| HitProbe {
-                tau,
-                sqrt_tau: math::sqrt_f64(tau),
-                half_ln_tau: 0.5 * math::ln_f64(tau),
-                inv_2tau: 0.5 / tau,
-                inv_4tau2: 0.25 / (tau * tau),
-            }),
-            short: lambda.map(|lambda| ShortProbe {
-                lambda,
-                ln_lambda: math::ln_f64(lambda),
-                inv_lambda: 1.0 / lambda,
-                inv_lambda2: 1.0 / (lambda * lambda),
-            }),
-            short_value: true,
+            hit: tau.map(|tau| HitProbe::new(tau, math::sqrt_f64(tau))),
+            short: lambda.map(ShortProbe::new),
+            values: true,
         }
     }
 
-    /// A probe at both `τ` and `λ`.
-    pub fn at(tau: f64, lambda: f64) -> Self {
-        Self::new(Some(tau), Some(lambda))
-    }
-
-    /// A probe at both `τ` and `λ` that needs only the derivatives of the short term, not its
-    /// value (the one-step update of [`super::ShapeUpdate::Truncated`]).
-    pub fn derivatives_at(tau: f64, lambda: f64) -> Self {
+    /// A probe at the E-step's own `σ` (metres, as [`Theta`] holds it: `τ = 1/σ²`,
+    /// `√τ = 1/σ` computed as [`Theta::new`] does, so the pass shares the truncation mass) and
+    /// `λ` (1/m, which shares the short normalizer). `values`: see [`Probe::values`]; the
+    /// one-step update of [`super::ShapeUpdate::Truncated`] needs only the derivatives.
+    pub fn at_theta(sigma: f64, lambda: f64, values: bool) -> Self {
         Self {
-            short_value: false,
-            ..Self::at(tau, lambda)
+            hit: Some(HitProbe::new(1.0 / (sigma * sigma), 1.0 / sigma)),
+            short: Some(ShortProbe::new(lambda)),
+            values,
+        }
+    }
+}
+
+impl ShortProbe {
+    fn new(lambda: f64) -> Self {
+        Self {
+            lambda,
+            ln_lambda: math::ln_f64(lambda),
+            inv_lambda: 1.0 / lambda,
+            inv_lambda2: 1.0 / (lambda * lambda),
         }
     }
 }
@@ -231,7 +254,9 @@ impl<const G: usize> PassStats<G> {
         if let Some(hp) = &probe.hit {
             let [e, sq] = self.hit_interior;
             // Σ e·(½ln τ − τd²/2), Σ e·(−d²/2 + 1/(2τ)), Σ e·(−2/(4τ²)): E[u²] = 1, E[u⁴] = 3.
-            self.hit_curve[0] += hp.half_ln_tau * e - 0.5 * hp.tau * sq;
+            if probe.values {
+                self.hit_curve[0] += hp.half_ln_tau * e - 0.5 * hp.tau * sq;
+            }
             self.hit_curve[1] += -0.5 * sq + hp.inv_2tau * e;
             self.hit_curve[2] += -2.0 * hp.inv_4tau2 * e;
         }
@@ -241,8 +266,8 @@ impl<const G: usize> PassStats<G> {
     /// Folds one reading in: E-step at `th`, and the probe's Q terms if asked for.
     ///
     /// The E-step works on the component densities themselves (linear domain): one `exp` for
-    /// the hit density, one `exp` and one `expm1` for the short one (only where `z ≤ z*`), none
-    /// for max and rand, and no `ln` per reading: the reading's density is multiplied into a
+    /// the hit density, one `exp` and one `expm1` for the short one (only where `z ≤ z*`; one
+    /// two-lane [`exp::exp_pair`] where `λz* ≥ ln 2`), none for max and rand, and no `ln` per reading: the reading's density is multiplied into a
     /// running product kept as a mantissa in `[1, 2)` and a binary exponent (exact integer
     /// bookkeeping, so it cannot under- or overflow), and [`PassStats::log_likelihood`] takes one
     /// `ln` per pass. This needs the density total to be a normal number well inside the
@@ -285,12 +310,17 @@ impl<const G: usize> PassStats<G> {
         let d = z - s;
         let u = d * th.inv_sigma;
         let half_u2 = 0.5 * u * u;
-        let mass = hit_mass(s, th.zmax, th.inv_sigma);
+        // Exactly 1 inside the interval (see mass_one_margin): no products, no erf tests.
+        let mass = if s > th.mass_one.0 && s < th.mass_one.1 {
+            1.0
+        } else {
+            hit_mass(s, th.zmax, th.inv_sigma)
+        };
         let short_ok = s > 0.0 && z <= s;
         // The short normalizer at θ's λ, shared with the short probe when that is at the same λ
         // (the E-step pass of the truncated updates).
         let short_norm = if short_ok {
-            Some(ShortNorm::new(th.lambda, s))
+            Some(ShortNorm::with_density(th.lambda, s, z))
         } else {
             None
         };
@@ -305,7 +335,7 @@ impl<const G: usize> PassStats<G> {
             lin_w[0] * exp::exp(-half_u2) / mass
         };
         let p_short = match &short_norm {
-            Some(sn) => lin_w[1] * exp::exp(-th.lambda * z) * sn.inv_one_minus(),
+            Some(sn) => lin_w[1] * sn.exp_neg_lambda_z * sn.inv_one_minus(),
             None => 0.0,
         };
         let (p_max, p_rand) = if is_max {
@@ -365,7 +395,13 @@ impl<const G: usize> PassStats<G> {
                     self.hit_interior[0] += e_hit;
                     self.hit_interior[1] += e_hit * d * d;
                 } else {
-                    let c = hit_curve(hp, d, s, th.zmax);
+                    // The E-step's mass when the probe is at θ's σ (see HitProbe::sqrt_tau).
+                    let m = if hp.sqrt_tau == th.inv_sigma {
+                        mass
+                    } else {
+                        hit_mass(s, th.zmax, hp.sqrt_tau)
+                    };
+                    let c = hit_curve(hp, d, s, th.zmax, m, probe.values);
                     for (a, b) in self.hit_curve.iter_mut().zip(c) {
                         *a += e_hit * b;
                     }
@@ -378,7 +414,7 @@ impl<const G: usize> PassStats<G> {
                     Some(sn) if sp.lambda == th.lambda => sn,
                     _ => ShortNorm::new(sp.lambda, s),
                 };
-                let c = short_curve(sp, z, s, &norm, probe.short_value);
+                let c = short_curve(sp, z, s, &norm, probe.values);
                 for (a, b) in self.short_curve.iter_mut().zip(c) {
                     *a += e_short * b;
                 }
@@ -397,6 +433,18 @@ fn fold_density(mant: &mut f64, exp: &mut i64, p: f64) {
     let biased = ((bits >> 52) & 0x7ff) as i64;
     *exp += biased - 1023;
     *mant = f64::from_bits((bits & MANTISSA_BITS) | ONE_BITS);
+}
+
+/// Distance from an end of `[0, z_max]` (metres) beyond which [`hit_mass`] is exactly 1 for a
+/// `z*` at that distance from both ends, with the computed operands: `6·√2·σ·(1 + 10⁻⁶)`.
+/// Proof: the computed `y = (x·(1/σ))·(1/√2)` in [`half_mass`] carries at most 4 roundings of
+/// relative size 2⁻⁵³ (`1/σ`, the two products, the constant), and `x = z*` or `z_max − z*` is
+/// exact or one correctly rounded subtraction, so `y > 6·(1 + 10⁻⁶)·(1 − 5·2⁻⁵³) > 6 =`
+/// `ERF_IS_ONE` and both halves are exactly 0.5. The margin (`8.5e-6·σ`) also dwarfs the
+/// rounding of the bounds themselves (≤ 2⁻⁵² z_max, and σ ≥ 10⁻⁶·z_max). Outside the interval
+/// the mass is computed as before, so the shortcut changes no result.
+fn mass_one_margin(sigma: f64) -> f64 {
+    ERF_IS_ONE * core::f64::consts::SQRT_2 * sigma * (1.0 + 1e-6)
 }
 
 /// `½·erf(x/√2)` for `x ≥ 0`: the standard normal mass between 0 and `x`.
@@ -443,11 +491,15 @@ fn phi_terms(x: f64) -> (f64, f64) {
 /// first branch exactly (`x² > 100` zeroes both density terms, and `|x|/√2 > 7.07 > ERF_IS_ONE`
 /// makes the mass exactly 1), so its value is `(½ln τ − τd²/2, −d²/2 + 1/(2τ), −2/(4τ²))`,
 /// linear in `1` and `d²`: the pass sums `e_hit` and `e_hit·d²` instead (no `erf`, no `exp`).
+///
+/// Tested as `z*` and `z_max − z*` both above `10·(1 + 10⁻⁶)/√τ` (two comparisons per reading,
+/// the bound computed once per probe): with at most a few roundings of relative size 2⁻⁵³ in
+/// the bound, the subtraction and the products, that implies the computed `α² > 100` and
+/// `β² > 100` that [`hit_curve`]'s first branch tests. A reading within the margin goes
+/// through [`hit_curve`] itself, whose result there is the same closed form.
 #[inline]
 fn hit_curve_interior(hp: &HitProbe, s: f64, zmax: f64) -> bool {
-    let alpha = -s * hp.sqrt_tau;
-    let beta = (zmax - s) * hp.sqrt_tau;
-    alpha * alpha > 100.0 && beta * beta > 100.0
+    s > hp.interior_margin && zmax - s > hp.interior_margin
 }
 
 /// One reading's hit term of Q as a function of the precision `τ = 1/σ²` (the constant
@@ -462,21 +514,27 @@ fn hit_curve_interior(hp: &HitProbe, s: f64, zmax: f64) -> bool {
 /// with `u` a standard normal truncated to `[α, β]`:
 /// `E[u²] = 1 − (βφ(β) − αφ(α))/M`, `E[u⁴] = 3·E[u²] − (β³φ(β) − α³φ(α))/M`. The truncated
 /// normal with a fixed mean is an exponential family along τ, which is why ℓ is concave in τ.
+///
+/// `mass` is `M(τ)`, [`hit_mass`] at `(s, zmax, hp.sqrt_tau)`. Without `value` the first entry
+/// is 0 (and no `ln` is taken).
 #[inline]
-fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64) -> Curve {
+fn hit_curve(hp: &HitProbe, d: f64, s: f64, zmax: f64, mass: f64, value: bool) -> Curve {
     let (tau, rt) = (hp.tau, hp.sqrt_tau);
     let alpha = -s * rt;
     let beta = (zmax - s) * rt;
-    let mass = half_mass(beta) + half_mass(-alpha);
     let (a1, a3) = phi_terms(alpha);
     let (b1, b3) = phi_terms(beta);
-    let (ln_mass, eu2, eu4) = if mass == 1.0 && a1 == 0.0 && b1 == 0.0 {
-        (0.0, 1.0, 3.0)
+    let (eu2, eu4) = if mass == 1.0 && a1 == 0.0 && b1 == 0.0 {
+        (1.0, 3.0)
     } else {
         let eu2 = 1.0 - (b1 - a1) / mass;
-        (math::ln_f64(mass), eu2, 3.0 * eu2 - (b3 - a3) / mass)
+        (eu2, 3.0 * eu2 - (b3 - a3) / mass)
     };
-    let q = hp.half_ln_tau - 0.5 * tau * d * d - ln_mass;
+    let q = if value {
+        hp.half_ln_tau - 0.5 * tau * d * d - ln_of_mass(mass)
+    } else {
+        0.0
+    };
     let g = -0.5 * d * d + eu2 * hp.inv_2tau;
     let h = -(eu4 - eu2 * eu2) * hp.inv_4tau2;
     [q, g, h]
@@ -516,6 +574,8 @@ fn short_curve(sp: &ShortProbe, z: f64, s: f64, norm: &ShortNorm, value: bool) -
 struct ShortNorm {
     em1: f64,
     inv_em1: f64,
+    /// `e^{−λz}` for the E-step's short density (only from [`ShortNorm::with_density`]).
+    exp_neg_lambda_z: f64,
 }
 
 impl ShortNorm {
@@ -525,6 +585,26 @@ impl ShortNorm {
         Self {
             em1,
             inv_em1: 1.0 / em1,
+            exp_neg_lambda_z: 0.0,
+        }
+    }
+
+    /// [`ShortNorm::new`] and `e^{−λz}` for a reading `z ≤ s`. Where `e^{λs} − 1` is `e^{λs}`
+    /// minus 1 (`λs ≥ ln 2`, see [`exp::expm1_nonneg`]) the two exponentials are one
+    /// [`exp::exp_pair`], with the same results.
+    #[inline]
+    fn with_density(lambda: f64, s: f64, z: f64) -> Self {
+        let x = lambda * s;
+        let (em1, e) = if x >= core::f64::consts::LN_2 {
+            let [ex, e] = exp::exp_pair([x, -lambda * z]);
+            (ex - 1.0, e)
+        } else {
+            (exp::expm1_nonneg(x), exp::exp(-lambda * z))
+        };
+        Self {
+            em1,
+            inv_em1: 1.0 / em1,
+            exp_neg_lambda_z: e,
         }
     }
 
@@ -581,6 +661,47 @@ mod tests {
         assert!(hit_mass(1.0, 30.0, 1.0 / 0.15) < 1.0);
     }
 
+    /// The interval tests stand for the per-reading formulas they replace: inside
+    /// `Theta::mass_one` the mass is exactly 1, and [`hit_curve_interior`] implies the
+    /// computed `α² > 100 && β² > 100` of [`hit_curve`]; checked densely across both bounds
+    /// for σ over eight decades (down to the 10⁻⁶·z_max floor).
+    #[test]
+    fn interval_shortcuts_imply_the_formulas() {
+        let mut inside = 0u64;
+        for zmax in [2.0f32, 8.0, 30.0, 81.83] {
+            let zmax64 = f64::from(zmax);
+            for rel in [1e-6f32, 1e-5, 1e-3, 0.004, 0.03, 0.1, 0.3] {
+                let sigma = zmax * rel;
+                let th = Theta::<1>::new(&[[0.7, 0.1, 0.1, 0.1]], sigma, 0.5, zmax);
+                let probe = Probe::at_theta(f64::from(sigma), 0.5, true);
+                let hp = probe.hit.unwrap();
+                let (lo, hi) = th.mass_one;
+                let ilo = hp.interior_margin;
+                for base in [lo, hi, ilo, zmax64 - ilo] {
+                    let mut s = base;
+                    let mut t = base;
+                    for _ in 0..3_000 {
+                        for x in [s, t] {
+                            if x > lo && x < hi {
+                                inside += 1;
+                                let m = hit_mass(x, zmax64, th.inv_sigma);
+                                assert_eq!(m.to_bits(), 1.0f64.to_bits(), "{x} {sigma}");
+                            }
+                            if hit_curve_interior(&hp, x, zmax64) {
+                                let a = -x * hp.sqrt_tau;
+                                let b = (zmax64 - x) * hp.sqrt_tau;
+                                assert!(a * a > 100.0 && b * b > 100.0, "{x} {sigma}");
+                            }
+                        }
+                        s = f64::from_bits(s.to_bits() + 1);
+                        t = f64::from_bits(t.to_bits() - 1);
+                    }
+                }
+            }
+        }
+        assert!(inside > 50_000, "{inside}");
+    }
+
     /// Where [`hit_curve_interior`] holds, [`hit_curve`] is exactly the closed form that
     /// [`PassStats::finish`] sums (so the interior shortcut only reassociates the sum).
     #[test]
@@ -593,7 +714,7 @@ mod tests {
             for i in 0..=3_000 {
                 let s = zmax * f64::from(i) / 3_000.0;
                 let d = 0.37 * sigma - 0.001 * f64::from(i % 7);
-                let full = hit_curve(&hp, d, s, zmax);
+                let full = hit_curve(&hp, d, s, zmax, hit_mass(s, zmax, hp.sqrt_tau), true);
                 if hit_curve_interior(&hp, s, zmax) {
                     interior += 1;
                     let closed = [
