@@ -60,51 +60,57 @@ impl<'a> BeamFieldModel<'a> {
     ) {
         let beams = layout.beams().iter().take(z_star_m.len());
         let mut outs = z_star_m.iter_mut().step_by(stride.get());
-        self.cast_in_order(layout, pose, beams.step_by(stride.get()), |z_star| {
+        let items = beams.map(|b| (b, ())).step_by(stride.get());
+        self.cast_in_order(layout, pose, items, |(), z_star| {
             if let Some(o) = outs.next() {
                 *o = z_star;
             }
         });
     }
 
-    /// Casts the beams `beams` of `layout` at `pose` and hands each `z*` (metres, `≤ z_max`)
-    /// to `f`, in the iterator's order. On the host the rays are cast [`CAST_BLOCK`] at a time
-    /// with [`RayCaster::cast_dirs`] (interleaved; the same results as one by one). On 32-bit
-    /// Arm (the Cortex-M targets: no data cache to hide, and interleaving costs instructions)
-    /// they are cast one by one.
+    /// Casts the beams of `items` (a beam of `layout` and anything `f` needs with it) at
+    /// `pose` and hands each item's extra and `z*` (metres, `≤ z_max`) to `f`, in the
+    /// iterator's order. On the host the rays are cast [`CAST_BLOCK`] at a time with
+    /// [`RayCaster::cast_dirs`] (interleaved; the same results as one by one). On 32-bit Arm
+    /// (the Cortex-M targets: no data cache to hide, and interleaving costs instructions) they
+    /// are cast one by one.
     #[inline(always)]
-    fn cast_in_order<'b, const N: usize>(
+    fn cast_in_order<'b, X: Copy, const N: usize>(
         &self,
         layout: &BeamLayout<N>,
         pose: &Pose,
-        beams: impl Iterator<Item = &'b Beam>,
-        mut f: impl FnMut(f32),
+        items: impl Iterator<Item = (&'b Beam, X)>,
+        mut f: impl FnMut(X, f32),
     ) {
         let sensor = layout.mount().sensor_pose(pose);
         let (s, c) = math::sin_cos(sensor.theta_rad);
         let max = self.model.intrinsics().max_range_m();
         let dir = |beam: &Beam| [c * beam.cos - s * beam.sin, s * beam.cos + c * beam.sin];
         if !BATCH_CASTS {
-            for beam in beams {
+            for (beam, x) in items {
                 let [ux, uy] = dir(beam);
-                f(self.caster.cast_dir(sensor.x_m, sensor.y_m, ux, uy, max));
+                f(x, self.caster.cast_dir(sensor.x_m, sensor.y_m, ux, uy, max));
             }
             return;
         }
-        let mut beams = beams;
+        let mut items = items;
         let mut dirs = [[0.0f32; 2]; CAST_BLOCK];
+        let mut extras: [Option<X>; CAST_BLOCK] = [None; CAST_BLOCK];
         let mut z_star = [0.0f32; CAST_BLOCK];
         loop {
             let mut n = 0usize;
-            for (d, beam) in dirs.iter_mut().zip(&mut beams) {
+            for ((d, e), (beam, x)) in dirs.iter_mut().zip(extras.iter_mut()).zip(&mut items) {
                 *d = dir(beam);
+                *e = Some(x);
                 n += 1;
             }
             let block = dirs.get(..n).unwrap_or_default();
             self.caster
                 .cast_dirs(sensor.x_m, sensor.y_m, block, max, &mut z_star);
-            for &z in z_star.iter().take(n) {
-                f(z);
+            for (e, &z) in extras.iter().zip(&z_star).take(n) {
+                if let Some(x) = *e {
+                    f(x, z);
+                }
             }
             if n < CAST_BLOCK {
                 return;
@@ -154,20 +160,19 @@ impl<const N: usize> SensorModel<N> for BeamFieldModel<'_> {
         let ranges = scan.ranges_m();
         let mut score = ScanScore::default();
         let mut sum = 0.0f32;
-        let beams = layout.beams().iter().take(ranges.len());
-        let mut readings = ranges.iter().step_by(stride.get());
-        self.cast_in_order(layout, pose, beams.step_by(stride.get()), |z_star| {
-            let Some(&z) = readings.next() else {
-                return;
-            };
-            match self.model.beam_log_likelihood(z, z_star) {
+        let items = layout.beams().iter().zip(ranges.iter().copied());
+        self.cast_in_order(
+            layout,
+            pose,
+            items.step_by(stride.get()),
+            |z, z_star| match self.model.beam_log_likelihood(z, z_star) {
                 Some(l) => {
                     sum += l;
                     score.scored = score.scored.saturating_add(1);
                 }
                 None => score.invalid = score.invalid.saturating_add(1),
-            }
-        });
+            },
+        );
         score.log_likelihood = sum;
         score.unpaired = saturating_u16(ranges.len().saturating_sub(layout.len()));
         score
