@@ -44,10 +44,9 @@
 //! cell steps up to its next jump, then the next ray takes over, so the core overlaps one
 //! ray's jump with another's steps. Every ray runs the same per-ray code as
 //! [`RayCaster::cast_dir`], so the ranges are identical bit for bit (tested on every beam of
-//! many poses on the Intel blob and on random blobs). On the host the beam model's casts are
-//! about 15 % faster this way in undisturbed passes (docs/race.md); on the Cortex-M4F, with
-//! no cache to hide, it only adds instructions, so [`crate::BeamFieldModel`] casts one by one
-//! there.
+//! many poses on the Intel blob and on random blobs). On the host the race's casts take about
+//! 0.8× the time this way (docs/race.md); on the Cortex-M4F, with nothing to overlap, it only
+//! adds instructions, so [`crate::BeamFieldModel`] casts one by one there.
 //!
 //! The returned range is the distance, metres, from the start to where the ray enters the
 //! first occupied cell (f32 arithmetic in cell units; the traversal never skips a cell the ray
@@ -60,7 +59,7 @@ use crate::math;
 pub const JUMP_MIN_CELLS: f32 = 2.0;
 
 /// Rays [`RayCaster::cast_dirs`] traces at once, interleaved.
-pub const CAST_LANES: usize = 4;
+pub const CAST_LANES: usize = 8;
 
 /// Why a blob cannot be ray cast.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -96,18 +95,6 @@ pub struct CastTrace {
 trait Probe {
     fn jump(&mut self);
     fn step(&mut self);
-}
-
-/// Notes a jump: where [`RayCaster::cast_dirs`] switches to the next ray.
-struct JumpSeen(bool);
-
-impl Probe for JumpSeen {
-    #[inline(always)]
-    fn jump(&mut self) {
-        self.0 = true;
-    }
-    #[inline(always)]
-    fn step(&mut self) {}
 }
 
 /// Counts nothing.
@@ -229,7 +216,7 @@ impl<'a> RayCaster<'a> {
     /// The rays are interleaved, [`CAST_LANES`] at a time: each runs its cell steps until its
     /// next sphere-tracing jump, then the next one takes over, so the out-of-order core can
     /// work on one ray's cell steps while another's jump (a chain of dependent arithmetic and a
-    /// load) completes. Stack: one ray state per lane (≈ 90 bytes each).
+    /// load) completes. Stack: one ray state per lane (≈ 100 bytes each on a 64-bit host).
     pub fn cast_dirs(
         &self,
         x_m: f32,
@@ -304,13 +291,13 @@ impl<'a> RayCaster<'a> {
                 if *slot == usize::MAX {
                     continue;
                 }
-                // This lane's cell steps up to and including its next jump (or its end).
-                let mut jumped = JumpSeen(false);
-                let done = loop {
-                    let r = ray.advance(self, &mut jumped);
-                    if r.is_some() || jumped.0 {
-                        break r;
+                // This lane's cell steps up to its next jump (or its end).
+                let done = match ray.run(self, &mut NoProbe) {
+                    Run::Jump(t) => {
+                        ray.walk = ray.restart(self, t);
+                        None
                     }
+                    Run::Done(done) => Some(done),
                 };
                 if let Some(done) = done {
                     if let Some(o) = out.get_mut(*slot) {
@@ -359,17 +346,18 @@ impl<'a> RayCaster<'a> {
             Err(done) => return done,
         };
         loop {
-            if let Some(done) = ray.advance(self, probe) {
-                return done;
+            match ray.run(self, probe) {
+                Run::Jump(t) => ray.walk = ray.restart(self, t),
+                Run::Done(done) => return done,
             }
         }
     }
 }
 
 /// One ray's traversal, in grid units: its constants and where it is. [`RayCaster::cast_grid`]
-/// drives one to the end with [`Ray::advance`]; [`RayCaster::cast_dirs`] interleaves several,
-/// switching rays at each jump. Both run the same [`Ray::advance`], so their results are
-/// identical bit for bit.
+/// drives one to the end; [`RayCaster::cast_dirs`] interleaves several, switching rays at each
+/// jump. Both run the same [`Ray::run`] and [`Ray::restart`], so their results are identical
+/// bit for bit.
 #[derive(Clone, Copy, Debug)]
 struct Ray {
     ox: f32,
@@ -423,13 +411,6 @@ impl Walk {
         left_x: 0,
         left_y: 0,
     };
-}
-
-/// The next boundary along one axis and the ray's time to reach it: `b + db`, `(b' − o)·inv`.
-#[inline(always)]
-fn next_boundary(b: f32, db: f32, o: f32, inv: f32) -> (f32, f32) {
-    let b = b + db;
-    (b, (b - o) * inv)
 }
 
 impl Ray {
@@ -556,69 +537,84 @@ impl Ray {
         }
     }
 
-    /// Where a sphere-tracing jump from a cell with `code` lands, cells.
+    /// Reads cells from the current one on, stepping cell by cell, until a cell allows a
+    /// sphere-tracing jump ([`Run::Jump`] with where it lands, before the end of the ray; the
+    /// caller restarts the traversal there) or the cast is over ([`Run::Done`]).
     #[inline(always)]
-    fn jump_t(&self, rc: &RayCaster<'_>, code: u8) -> f32 {
-        self.walk.t + f32::from(code) * rc.step_cells - rc.jump_margin_cells
-    }
-
-    /// Reads the current cell and moves on: a sphere-tracing jump (restarting the traversal
-    /// where it lands) or one cell step. `Some` with the cast's result when the ray is done.
-    #[inline(always)]
-    fn advance<P: Probe>(&mut self, rc: &RayCaster<'_>, probe: &mut P) -> Option<Option<f32>> {
-        let Some(&code) = rc.codes.get(self.walk.idx) else {
-            return Some(None);
-        };
-        if u16::from(code) >= rc.jump_code {
-            probe.jump();
-            let t = self.jump_t(rc, code);
-            if t >= self.t_end {
-                return Some(None);
+    fn run<P: Probe>(&self, rc: &RayCaster<'_>, probe: &mut P) -> Run {
+        let Walk {
+            mut t,
+            mut idx,
+            mut bx,
+            mut by,
+            mut t_x,
+            mut t_y,
+            mut left_x,
+            mut left_y,
+        } = self.walk;
+        loop {
+            let Some(&code) = rc.codes.get(idx) else {
+                return Run::Done(None);
+            };
+            if u16::from(code) >= rc.jump_code {
+                probe.jump();
+                t += f32::from(code) * rc.step_cells - rc.jump_margin_cells;
+                if t >= self.t_end {
+                    return Run::Done(None);
+                }
+                return Run::Jump(t);
             }
-            self.walk = self.restart(rc, t);
-            return None;
+            if code == 0 {
+                return Run::Done(Some(t));
+            }
+            probe.step();
+            if t_x < t_y {
+                let Some(left) = left_x.checked_sub(1) else {
+                    return Run::Done(None);
+                };
+                left_x = left;
+                t = t_x;
+                bx += self.dbx;
+                t_x = (bx - self.ox) * self.inv_x;
+                idx = idx.wrapping_add_signed(self.dix);
+            } else if t_y < t_x {
+                let Some(left) = left_y.checked_sub(1) else {
+                    return Run::Done(None);
+                };
+                left_y = left;
+                t = t_y;
+                by += self.dby;
+                t_y = (by - self.oy) * self.inv_y;
+                idx = idx.wrapping_add_signed(self.diy);
+            } else {
+                // Exactly through a corner: a diagonal step, like the host reference.
+                let (Some(lx), Some(ly)) = (left_x.checked_sub(1), left_y.checked_sub(1)) else {
+                    return Run::Done(None);
+                };
+                left_x = lx;
+                left_y = ly;
+                t = t_x;
+                bx += self.dbx;
+                by += self.dby;
+                t_x = (bx - self.ox) * self.inv_x;
+                t_y = (by - self.oy) * self.inv_y;
+                idx = idx
+                    .wrapping_add_signed(self.dix)
+                    .wrapping_add_signed(self.diy);
+            }
+            if t >= self.t_end {
+                return Run::Done(None);
+            }
         }
-        if code == 0 {
-            return Some(Some(self.walk.t));
-        }
-        probe.step();
-        let w = &mut self.walk;
-        if w.t_x < w.t_y {
-            let Some(left) = w.left_x.checked_sub(1) else {
-                return Some(None);
-            };
-            w.left_x = left;
-            w.t = w.t_x;
-            (w.bx, w.t_x) = next_boundary(w.bx, self.dbx, self.ox, self.inv_x);
-            w.idx = w.idx.wrapping_add_signed(self.dix);
-        } else if w.t_y < w.t_x {
-            let Some(left) = w.left_y.checked_sub(1) else {
-                return Some(None);
-            };
-            w.left_y = left;
-            w.t = w.t_y;
-            (w.by, w.t_y) = next_boundary(w.by, self.dby, self.oy, self.inv_y);
-            w.idx = w.idx.wrapping_add_signed(self.diy);
-        } else {
-            // Exactly through a corner: a diagonal step, like the host reference.
-            let (Some(lx), Some(ly)) = (w.left_x.checked_sub(1), w.left_y.checked_sub(1)) else {
-                return Some(None);
-            };
-            w.left_x = lx;
-            w.left_y = ly;
-            w.t = w.t_x;
-            (w.bx, w.t_x) = next_boundary(w.bx, self.dbx, self.ox, self.inv_x);
-            (w.by, w.t_y) = next_boundary(w.by, self.dby, self.oy, self.inv_y);
-            w.idx = w
-                .idx
-                .wrapping_add_signed(self.dix)
-                .wrapping_add_signed(self.diy);
-        }
-        if w.t >= self.t_end {
-            return Some(None);
-        }
-        None
     }
+}
+
+/// How a run of cell steps ([`Ray::run`]) ended.
+enum Run {
+    /// A jump to this distance, cells (before the end of the ray).
+    Jump(f32),
+    /// The cast's result: the entry distance of the first occupied cell, or `None`.
+    Done(Option<f32>),
 }
 
 /// The smallest code whose safe jump `code·step − margin` (cells) exceeds `min_cells`, or 256

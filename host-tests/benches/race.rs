@@ -11,7 +11,7 @@
 //!
 //! Also measured: the ray casts alone (`BeamFieldModel::cast_layout`), to split the beam
 //! model's cost into z* and mixture, and the batch cast `RayCaster::cast_dirs_lanes` over whole
-//! scans with 1 (one ray at a time), 2, 4 (the default, `CAST_LANES`) and 8 interleaved rays.
+//! scans with 1 (one ray at a time), 2, 4 and 8 (the default, `CAST_LANES`) interleaved rays.
 
 #[path = "../common/intel_race.rs"]
 mod intel_race;
