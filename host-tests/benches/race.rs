@@ -10,7 +10,8 @@
 //! not absolute times across machines.
 //!
 //! Also measured: the ray casts alone (`BeamFieldModel::cast_layout`), to split the beam
-//! model's cost into z* and mixture.
+//! model's cost into z* and mixture, and the batch cast `RayCaster::cast_dirs_lanes` over whole
+//! scans with 1 (one ray at a time), 2, 4 and 8 (the default, `CAST_LANES`) interleaved rays.
 
 #[path = "../common/intel_race.rs"]
 mod intel_race;
@@ -118,6 +119,33 @@ fn race(c: &mut Criterion) {
             acc
         })
     });
+    // The batch cast (`RayCaster::cast_dirs`) with other lane counts than the default, whole
+    // scans at once (the model casts blocks of `CAST_BLOCK` beams); 1 lane = one ray at a time.
+    let dirs_of = |pose: &beamfield::Pose| -> [[f32; 2]; N] {
+        let (s, c) = beamfield::math::sin_cos(pose.theta_rad);
+        let mut d = [[0.0f32; 2]; N];
+        for (d, b) in d.iter_mut().zip(layout.beams()) {
+            *d = [c * b.cos - s * b.sin, s * b.cos + c * b.sin];
+        }
+        d
+    };
+    macro_rules! lanes {
+        ($($k:literal),*) => {$(
+            g.bench_function(concat!("raycast_lanes_", $k), |b| {
+                b.iter(|| {
+                    let mut acc = 0.0f32;
+                    for (_, _, pose) in scans {
+                        let pose = black_box(pose);
+                        let dirs = dirs_of(pose);
+                        beam.caster().cast_dirs_lanes::<$k>(pose.x_m, pose.y_m, &dirs, max, &mut z_star);
+                        acc += z_star.iter().sum::<f32>();
+                    }
+                    acc
+                })
+            });
+        )*};
+    }
+    lanes!(1, 2, 4, 8);
     // The same casts with other thresholds for taking a sphere-tracing jump (default 2 cells).
     for min_jump in [1.0f32, 3.0, 5.0, 8.0, 12.0] {
         let tuned = beamfield::BeamFieldModel::new(
