@@ -6,18 +6,7 @@ pub const BEAMS: usize = 4_500;
 /// M-steps per fit in the bench.
 pub const ITERATIONS: u32 = 24;
 
-/// SplitMix64, for a reproducible data set.
-struct Rng(u64);
-
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use host_tests::splitmix::SplitMix64 as Rng;
 
 /// 4,500 readings from a lidar-like mixture (z_max 30 m, z* in [0.5, 30], σ = 0.15 m,
 /// λ = 0.5/m, weights 0.75/0.1/0.05/0.1): `(z, z*)`, metres.

@@ -11,6 +11,7 @@ pub mod issue9_cases;
 pub mod reference;
 pub mod sonar_sim;
 pub mod sonar_uci;
+pub mod splitmix;
 pub mod xorshift;
 
 use std::path::PathBuf;

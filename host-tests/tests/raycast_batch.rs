@@ -10,22 +10,8 @@ mod intel_race;
 
 use beamfield::field::{emit_blob, FieldHeader, FieldView};
 use beamfield::{BeamFieldModel, Pose, RayCaster, SensorModel, Stride};
+use host_tests::splitmix::SplitMix64 as Rng;
 use intel_race::N;
-
-/// A small deterministic generator (splitmix64), independent of the code under test.
-struct Rng(u64);
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn next(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 /// Casts `dirs` from `(x, y)` through the batch with 1, 2, 3, 4, 8 and 16 lanes and the default,
 /// and one by one; asserts every range equal bit for bit. Returns how many rays it checked.
@@ -82,9 +68,9 @@ fn intel_every_beam_of_many_poses() {
                     *logged
                 } else {
                     Pose {
-                        x_m: logged.x_m + (rng.next() as f32 - 0.5),
-                        y_m: logged.y_m + (rng.next() as f32 - 0.5),
-                        theta_rad: ((rng.next() * 2.0 - 1.0) * std::f64::consts::PI) as f32,
+                        x_m: logged.x_m + (rng.uniform() as f32 - 0.5),
+                        y_m: logged.y_m + (rng.uniform() as f32 - 0.5),
+                        theta_rad: ((rng.uniform() * 2.0 - 1.0) * std::f64::consts::PI) as f32,
                     }
                 };
                 let (s, c) = pose.theta_rad.sin_cos();
@@ -112,10 +98,10 @@ fn intel_every_beam_of_many_poses() {
 fn random_blob(rng: &mut Rng, w: u32, h: u32, occupied: f64) -> Vec<u8> {
     let codes: Vec<u8> = (0..w * h)
         .map(|_| {
-            if rng.next() < occupied {
+            if rng.uniform() < occupied {
                 0
             } else {
-                1 + (rng.next() * 254.99) as u8
+                1 + (rng.uniform() * 254.99) as u8
             }
         })
         .collect();
@@ -131,8 +117,8 @@ fn random_blobs_random_rays() {
     let mut rays = 0;
     for trial in 0..60 {
         let (w, h) = (
-            1 + (rng.next() * 90.0) as u32,
-            1 + (rng.next() * 90.0) as u32,
+            1 + (rng.uniform() * 90.0) as u32,
+            1 + (rng.uniform() * 90.0) as u32,
         );
         let occupied = [0.0, 0.002, 0.02, 0.2][trial % 4];
         let blob = random_blob(&mut rng, w, h, occupied);
@@ -144,16 +130,16 @@ fn random_blobs_random_rays() {
         let (wm, hm) = (w as f32 * 0.05, h as f32 * 0.05);
         for _ in 0..40 {
             // Starts over the map and a margin around it; cell centres and corners too.
-            let mut x = x0 - 0.5 + rng.next() as f32 * (wm + 1.0);
-            let mut y = y0 - 0.5 + rng.next() as f32 * (hm + 1.0);
+            let mut x = x0 - 0.5 + rng.uniform() as f32 * (wm + 1.0);
+            let mut y = y0 - 0.5 + rng.uniform() as f32 * (hm + 1.0);
             match rng.next_u64() % 4 {
                 0 => {
-                    x = x0 + ((rng.next() * f64::from(w)) as u32 as f32 + 0.5) * 0.05;
-                    y = y0 + ((rng.next() * f64::from(h)) as u32 as f32 + 0.5) * 0.05;
+                    x = x0 + ((rng.uniform() * f64::from(w)) as u32 as f32 + 0.5) * 0.05;
+                    y = y0 + ((rng.uniform() * f64::from(h)) as u32 as f32 + 0.5) * 0.05;
                 }
                 1 => {
-                    x = x0 + (rng.next() * f64::from(w)) as u32 as f32 * 0.05;
-                    y = y0 + (rng.next() * f64::from(h)) as u32 as f32 * 0.05;
+                    x = x0 + (rng.uniform() * f64::from(w)) as u32 as f32 * 0.05;
+                    y = y0 + (rng.uniform() * f64::from(h)) as u32 as f32 * 0.05;
                 }
                 _ => {}
             }
@@ -174,7 +160,7 @@ fn random_blobs_random_rays() {
                         [1e-40, 1.0],
                     ][(rng.next_u64() % 4) as usize],
                     _ => {
-                        let a = (rng.next() * 2.0 - 1.0) * std::f64::consts::PI;
+                        let a = (rng.uniform() * 2.0 - 1.0) * std::f64::consts::PI;
                         [a.cos() as f32, a.sin() as f32]
                     }
                 })
@@ -232,9 +218,9 @@ fn intel_scores_equal_one_by_one() {
                 *logged
             } else {
                 Pose {
-                    x_m: logged.x_m + 0.3 * (rng.next() as f32 - 0.5),
-                    y_m: logged.y_m + 0.3 * (rng.next() as f32 - 0.5),
-                    theta_rad: logged.theta_rad + (rng.next() as f32 - 0.5),
+                    x_m: logged.x_m + 0.3 * (rng.uniform() as f32 - 0.5),
+                    y_m: logged.y_m + 0.3 * (rng.uniform() as f32 - 0.5),
+                    theta_rad: logged.theta_rad + (rng.uniform() as f32 - 0.5),
                 }
             };
             for stride in [1usize, 2, 3, 7, 17, 200] {
@@ -300,9 +286,9 @@ fn random_blob_scores_equal_one_by_one() {
         let model = BeamFieldModel::new(*beam.model(), rc);
         let (_, scan, _) = &data.scans[trial as usize];
         let pose = Pose {
-            x_m: -1.3 + rng.next() as f32 * 3.0,
-            y_m: 0.7 + rng.next() as f32 * 2.5,
-            theta_rad: rng.next() as f32 * 6.0,
+            x_m: -1.3 + rng.uniform() as f32 * 3.0,
+            y_m: 0.7 + rng.uniform() as f32 * 2.5,
+            theta_rad: rng.uniform() as f32 * 6.0,
         };
         let sensor = layout.mount().sensor_pose(&pose);
         let (s, c) = beamfield::math::sin_cos(sensor.theta_rad);
