@@ -12,33 +12,7 @@
 //! arrived before `i`'s own: that rate is the simulator's *effective* pairwise `q`.
 
 /// A small deterministic PRNG (SplitMix64), so the tests need no external randomness.
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)`.
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Standard normal (Box–Muller).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = self.uniform().max(1e-300);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-}
+pub use crate::splitmix::SplitMix64 as Rng;
 
 /// A room: wall segments `[x0, y0, x1, y1]` (metres) and the boxes they include.
 #[derive(Clone, Debug)]
@@ -334,7 +308,7 @@ pub fn simulate_cycle(
                 let m = 1.0 - (-p.lambda_short_per_m * zs).exp();
                 -(1.0 - rng.uniform() * m).ln() / p.lambda_short_per_m
             } else {
-                (zs + p.sigma_hit_m * rng.normal()).clamp(0.0, zmax)
+                (zs + p.sigma_hit_m * rng.normal_clamped()).clamp(0.0, zmax)
             };
             let mut reading = own;
             let mut from_neighbour = false;

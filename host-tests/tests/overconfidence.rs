@@ -70,7 +70,7 @@ fn true_scan() -> Scan<N> {
         .map(|k| {
             let a = TRUTH.2 + k as f64 * std::f64::consts::TAU / N as f64;
             let r = world.ray_cast(TRUTH.0, TRUTH.1, a, f64::from(MAX_RANGE_M));
-            (r + 0.02 * rng.normal()) as f32
+            (r + 0.02 * rng.normal_clamped()) as f32
         })
         .collect();
     Scan::from_ranges(&ranges).unwrap()
