@@ -45,6 +45,38 @@ const Q7: f64 = f64::from_bits(0x3EC7_1DE0_DB2F_6B19); // 2.7557268480310024e-06
 const Q8: f64 = f64::from_bits(0x3E92_8917_C89A_43A7); // 2.7620075879983367e-07
 const Q9: f64 = f64::from_bits(0x3E5A_F389_ECFC_4B9C); // 2.5100375832561234e-08
 
+/// `t = 1.5·2⁵² + k` with `k = round(x / ln 2)` exactly (|k| ≤ 1022 for `|x| ≤ FAST_LIMIT`): an
+/// f64 in [2⁵², 2⁵³) whose fraction bits are 2⁵¹ + k, so the low 12 bits of t's bits + 1023
+/// are k + 1023 (no carry leaves them); and the reduced argument `r = x − k·ln 2`.
+#[inline(always)]
+fn reduce(x: f64) -> (f64, f64) {
+    let t = x * LOG2E + ROUND_SHIFT;
+    let kf = t - ROUND_SHIFT;
+    (t, (x - kf * LN2_HI) - kf * LN2_LO)
+}
+
+/// `e^r` on the reduced range: `1 + r + r²·q(r)`, q by Estrin's scheme (short dependency
+/// chains).
+#[inline(always)]
+fn poly(r: f64) -> f64 {
+    let r2 = r * r;
+    let r4 = r2 * r2;
+    let r8 = r4 * r4;
+    let q = (Q0 + r * Q1)
+        + r2 * (Q2 + r * Q3)
+        + r4 * ((Q4 + r * Q5) + r2 * (Q6 + r * Q7))
+        + r8 * (Q8 + r * Q9);
+    1.0 + (r + r2 * q)
+}
+
+/// `2^k` from [`reduce`]'s `t`: |k| ≤ 1022, so the biased exponent k + 1023 is in 1..=2045, a
+/// normal number, built from t's bits (shifting left by 52 keeps exactly those 12 low bits; no
+/// float-to-int conversion).
+#[inline(always)]
+fn scale(t: f64) -> f64 {
+    f64::from_bits(t.to_bits().wrapping_add(1023) << 52)
+}
+
 /// `e^x`, within 1 ulp.
 #[inline]
 pub(crate) fn exp(x: f64) -> f64 {
@@ -53,25 +85,8 @@ pub(crate) fn exp(x: f64) -> f64 {
     if !inline {
         return math::exp_f64(x);
     }
-    // t = 1.5·2⁵² + k exactly (|k| ≤ 1022): an f64 in [2⁵², 2⁵³), whose fraction bits are
-    // 2⁵¹ + k, so the low 12 bits of t's bits + 1023 are k + 1023 (no carry leaves them).
-    let t = x * LOG2E + ROUND_SHIFT;
-    let kf = t - ROUND_SHIFT;
-    let r = (x - kf * LN2_HI) - kf * LN2_LO;
-    let r2 = r * r;
-    let r4 = r2 * r2;
-    let r8 = r4 * r4;
-    // q(r) by Estrin's scheme (short dependency chains).
-    let q = (Q0 + r * Q1)
-        + r2 * (Q2 + r * Q3)
-        + r4 * ((Q4 + r * Q5) + r2 * (Q6 + r * Q7))
-        + r8 * (Q8 + r * Q9);
-    let p = 1.0 + (r + r2 * q);
-    // |k| ≤ 1022 here, so the biased exponent k + 1023 is in 1..=2045: a normal 2^k, built
-    // from t's bits (shifting left by 52 keeps exactly those 12 low bits; no float-to-int
-    // conversion).
-    let scale = f64::from_bits(t.to_bits().wrapping_add(1023) << 52);
-    p * scale
+    let (t, r) = reduce(x);
+    poly(r) * scale(t)
 }
 
 /// `[e^a, e^b]`: the same operations as [`exp`] on two lanes side by side (bit for bit the
@@ -81,26 +96,9 @@ pub(crate) fn exp_pair([a, b]: [f64; 2]) -> [f64; 2] {
     if !(a.abs() <= FAST_LIMIT && b.abs() <= FAST_LIMIT) {
         return [exp(a), exp(b)];
     }
-    let x = [a, b];
-    let t = x.map(|x| x * LOG2E + ROUND_SHIFT);
-    let kf = t.map(|t| t - ROUND_SHIFT);
-    let r = [
-        (x[0] - kf[0] * LN2_HI) - kf[0] * LN2_LO,
-        (x[1] - kf[1] * LN2_HI) - kf[1] * LN2_LO,
-    ];
-    let lane = |r: f64| {
-        let r2 = r * r;
-        let r4 = r2 * r2;
-        let r8 = r4 * r4;
-        let q = (Q0 + r * Q1)
-            + r2 * (Q2 + r * Q3)
-            + r4 * ((Q4 + r * Q5) + r2 * (Q6 + r * Q7))
-            + r8 * (Q8 + r * Q9);
-        1.0 + (r + r2 * q)
-    };
-    let p = r.map(lane);
-    let scale = t.map(|t| f64::from_bits(t.to_bits().wrapping_add(1023) << 52));
-    [p[0] * scale[0], p[1] * scale[1]]
+    let [(ta, ra), (tb, rb)] = [reduce(a), reduce(b)];
+    let p = [ra, rb].map(poly);
+    [p[0] * scale(ta), p[1] * scale(tb)]
 }
 
 /// `e^x − 1` for `x ≥ 0`. From `x ≥ ln 2` on, `e^x ≥ 2` and subtracting 1 loses no accuracy
