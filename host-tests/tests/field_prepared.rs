@@ -33,6 +33,14 @@ const N: usize = 180;
 
 use host_tests::xorshift::XorShift64 as Rng;
 
+/// The likelihood field with AMCL's default parameters over `blob`.
+fn amcl_field(blob: &[u8], z_max: f32) -> LikelihoodField<'_> {
+    LikelihoodField::new(
+        FieldView::parse(blob).unwrap(),
+        LikelihoodParams::amcl_defaults(z_max).unwrap(),
+    )
+}
+
 fn blob_of(rel: &str) -> Vec<u8> {
     build_blob(&load_map(&host_tests::data_dir().join(rel)).unwrap(), 2.0).unwrap()
 }
@@ -225,10 +233,7 @@ fn fallback_poses_and_stride() {
     let z_max = log.max_range.value_m().unwrap();
     let layout: BeamLayout<N> = log.layout().unwrap();
     let blob = blob_of("map_turtlebot3_world/map.yaml");
-    let lf = LikelihoodField::new(
-        FieldView::parse(&blob).unwrap(),
-        LikelihoodParams::amcl_defaults(z_max).unwrap(),
-    );
+    let lf = amcl_field(&blob, z_max);
     let scan = log.scans[300].to_scan::<N>().unwrap();
     let prep = lf.prepare(&layout, &scan);
     let mut t = Tally::default();
@@ -268,10 +273,7 @@ fn wide_map_uses_fewer_fraction_bits() {
     let codes: Vec<u8> = (0..w * h).map(|i| ((i * 37) % 251) as u8).collect();
     let mut blob = vec![0u8; header.required_len().unwrap()];
     emit_blob(&header, &codes, &mut blob).unwrap();
-    let lf = LikelihoodField::new(
-        FieldView::parse(&blob).unwrap(),
-        LikelihoodParams::amcl_defaults(10.0).unwrap(),
-    );
+    let lf = amcl_field(&blob, 10.0);
     let layout =
         BeamLayout::<N>::uniform(-1.5, 3.0 / N as f32, N, 10.0, SensorMount::CENTERED).unwrap();
     let mut rng = Rng(77);
@@ -346,10 +348,7 @@ fn poses_at_the_edge_of_the_fixed_point_region_agree_with_score() {
         (strip(140_000), 12),
     ];
     for (blob, want_f) in &blobs {
-        let lf = LikelihoodField::new(
-            FieldView::parse(blob).unwrap(),
-            LikelihoodParams::amcl_defaults(z_max).unwrap(),
-        );
+        let lf = amcl_field(blob, z_max);
         let prep = lf.prepare(&layout, &scan);
         assert_eq!(prep.frac_bits(), *want_f);
         let mut t = Tally::default();
@@ -417,10 +416,7 @@ fn tempered_prepare_matches_the_tempered_model() {
     let z_max = log.max_range.value_m().unwrap();
     let layout: BeamLayout<N> = log.layout().unwrap();
     let blob = blob_of("map_turtlebot3_world/map.yaml");
-    let lf = LikelihoodField::new(
-        FieldView::parse(&blob).unwrap(),
-        LikelihoodParams::amcl_defaults(z_max).unwrap(),
-    );
+    let lf = amcl_field(&blob, z_max);
     let mut rng = Rng(5);
     let (mut equal, mut poses) = (0usize, 0usize);
     for (kappa, stride) in [(1.0f32, 1usize), (8.25, 1), (4.0, 3)] {
