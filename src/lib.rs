@@ -20,9 +20,9 @@ pub mod scan;
 pub mod sonar;
 pub mod tempered;
 // With `micromath`, its sin/cos are used instead and this module only runs its tests.
-#[cfg_attr(feature = "micromath", allow(dead_code))]
 #[cfg(test)]
 mod test_rng;
+#[cfg_attr(feature = "micromath", allow(dead_code))]
 mod trig;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
