@@ -19,9 +19,9 @@ pub mod raycast;
 pub mod scan;
 pub mod sonar;
 pub mod tempered;
-// With `micromath`, its sin/cos are used instead and this module only runs its tests.
 #[cfg(test)]
 mod test_rng;
+// With `micromath`, its sin/cos are used instead and this module only runs its tests.
 #[cfg_attr(feature = "micromath", allow(dead_code))]
 mod trig;
 
