@@ -64,6 +64,22 @@ pub struct ScoreArgs {
     /// θ profile half-width, degrees (step 0.25°).
     #[arg(long = "grid-half-deg", default_value_t = 10.0)]
     grid_half_deg: f64,
+    /// Write a PNG of the scan's endpoints over the field around the pose: at the pose (blue)
+    /// and at the best pose of the x–y–θ grid that --grid-half, --grid-step and
+    /// --grid-half-deg span (θ in 0.25° steps; green), with the offset between them in the
+    /// title. The best pose is also printed.
+    #[arg(long, value_name = "PNG")]
+    overlay: Option<PathBuf>,
+    /// Half-width of the --overlay picture's window, metres.
+    #[arg(long = "overlay-half", default_value_t = 6.0)]
+    overlay_half: f64,
+    /// Centre "X,Y" of the --overlay picture's window (metres, map frame); default: the pose.
+    #[arg(
+        long = "overlay-center",
+        allow_hyphen_values = true,
+        value_name = "X,Y"
+    )]
+    overlay_center: Option<String>,
 }
 
 /// `beamfield calibrate`: the smallest κ whose credible sets hold the logged poses.
@@ -203,6 +219,14 @@ pub fn run_score(a: &ScoreArgs, json: bool) -> Result<String, ScoreCmdError> {
     if let Some(prefix) = &a.grid {
         files = write_grid(a, &model, &l.layout, &scan, &pose, prefix)?;
     }
+    let mut best = None;
+    if let Some(path) = &a.overlay {
+        let center = overlay_center(a, &pose)?;
+        let b = best_grid_pose(a, &model, &l.layout, &scan, &pose)?;
+        write_overlay(a, &l, &scan, &pose, center, &b, path)?;
+        files.push(path.display().to_string());
+        best = Some(b);
+    }
     if json {
         out = serde_json::json!({
             "scan": a.scan,
@@ -214,6 +238,12 @@ pub fn run_score(a: &ScoreArgs, json: bool) -> Result<String, ScoreCmdError> {
             "max_range": s.max_range,
             "invalid": s.invalid,
             "unpaired": s.unpaired,
+            "best_grid_pose": best.as_ref().map(|b| serde_json::json!({
+                "pose": [b.pose.x_m, b.pose.y_m, b.pose.theta_rad],
+                "offset_m_m_rad": [b.offset.0, b.offset.1, b.offset.2],
+                "log_likelihood": b.log_likelihood,
+                "grid_poses": b.poses,
+            })),
             "files": files,
         })
         .to_string();
@@ -228,11 +258,159 @@ pub fn run_score(a: &ScoreArgs, json: bool) -> Result<String, ScoreCmdError> {
             "beams: {} scored, {} max-range skipped, {} invalid, {} unpaired",
             s.scored, s.max_range, s.invalid, s.unpaired
         );
+        if let Some(b) = &best {
+            let (dx, dy, dt) = b.offset;
+            let _ = write!(
+                out,
+                "\nbest of {} grid poses: ({:.3} m, {:.3} m, {:.4} rad), {:.1} cm ({:+.1}, {:+.1}) and {:+.2}° from the pose; log-likelihood {:.3} nats ({:+.3})",
+                b.poses,
+                b.pose.x_m,
+                b.pose.y_m,
+                b.pose.theta_rad,
+                (dx * dx + dy * dy).sqrt() * 100.0,
+                dx * 100.0,
+                dy * 100.0,
+                dt.to_degrees(),
+                b.log_likelihood,
+                b.log_likelihood - f64::from(s.log_likelihood)
+            );
+        }
         for f in &files {
             let _ = write!(out, "\nwrote {f}");
         }
     }
     Ok(out)
+}
+
+fn check_grid(a: &ScoreArgs) -> Result<(), ScoreCmdError> {
+    if !(a.grid_step > 0.0 && a.grid_half >= a.grid_step && a.grid_half / a.grid_step <= 500.0) {
+        return Err(usage(
+            "--grid-step must be > 0 and at most --grid-half, with ≤ 500 steps per side",
+        ));
+    }
+    if !(a.grid_half_deg > 0.0 && a.grid_half_deg <= 180.0) {
+        return Err(usage("--grid-half-deg must be in (0, 180]"));
+    }
+    Ok(())
+}
+
+/// The best pose of the x–y–θ grid around the given pose (`--overlay`).
+struct BestPose {
+    pose: Pose,
+    offset: (f64, f64, f64),
+    log_likelihood: f64,
+    poses: usize,
+}
+
+fn best_grid_pose<M: SensorModel<MAX_BEAMS>>(
+    a: &ScoreArgs,
+    model: &M,
+    layout: &BeamLayout<MAX_BEAMS>,
+    scan: &Scan<MAX_BEAMS>,
+    pose: &Pose,
+) -> Result<BestPose, ScoreCmdError> {
+    check_grid(a)?;
+    let spec = GridSpec {
+        half_xy_m: a.grid_half,
+        step_xy_m: a.grid_step,
+        half_theta_rad: a.grid_half_deg.to_radians(),
+        step_theta_rad: 0.25f64.to_radians(),
+    };
+    if spec.len() > 20_000_000 {
+        return Err(usage(format!(
+            "--overlay: the x–y–θ grid has {} poses (at most 20 million): use a coarser --grid-step or a smaller --grid-half or --grid-half-deg",
+            spec.len()
+        )));
+    }
+    eprintln!(
+        "score: searching {} poses for the overlay's best pose",
+        spec.len()
+    );
+    let g = score_grid(model, layout, scan, pose, &spec);
+    let i = argmax(&g.log_likelihood).ok_or_else(|| usage("the pose grid is empty"))?;
+    Ok(BestPose {
+        pose: spec.pose(pose, i),
+        offset: spec.offset(i),
+        log_likelihood: g.log_likelihood.get(i).copied().unwrap_or(f64::NAN),
+        poses: spec.len(),
+    })
+}
+
+/// The `--overlay` window's centre (metres), checking `--overlay-half` and `--overlay-center`.
+fn overlay_center(a: &ScoreArgs, pose: &Pose) -> Result<(f64, f64), ScoreCmdError> {
+    if !(a.overlay_half.is_finite() && a.overlay_half > 0.0 && a.overlay_half <= 1000.0) {
+        return Err(usage("--overlay-half must be in (0, 1000] metres"));
+    }
+    Ok(match &a.overlay_center {
+        None => (f64::from(pose.x_m), f64::from(pose.y_m)),
+        Some(t) => {
+            let v: Vec<f64> = t
+                .split(',')
+                .map(|p| p.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| usage(format!("--overlay-center {t:?}: expected X,Y (numbers)")))?;
+            match v.as_slice() {
+                [x, y] if x.is_finite() && y.is_finite() => (*x, *y),
+                _ => {
+                    return Err(usage(format!(
+                        "--overlay-center {t:?}: expected two finite numbers"
+                    )))
+                }
+            }
+        }
+    })
+}
+
+fn write_overlay(
+    a: &ScoreArgs,
+    l: &Loaded,
+    scan: &Scan<MAX_BEAMS>,
+    pose: &Pose,
+    center: (f64, f64),
+    best: &BestPose,
+    path: &Path,
+) -> Result<(), ScoreCmdError> {
+    let bearings: Vec<f32> = l.layout.beams().iter().map(|b| b.bearing_rad).collect();
+    let max_range = l.params.max_range_m();
+    let at = |p: &Pose| (f64::from(p.x_m), f64::from(p.y_m), f64::from(p.theta_rad));
+    let (dx, dy, dt) = best.offset;
+    let title = format!(
+        "scan {}: best grid pose {:.1} cm, {:.2}° from the given one",
+        a.scan,
+        (dx * dx + dy * dy).sqrt() * 100.0,
+        dt.to_degrees()
+    );
+    let scans = vec![
+        crate::overlay::OverlayScan {
+            name: "endpoints at the given pose".into(),
+            color: plotters::style::RGBColor(20, 90, 230),
+            pose: at(pose),
+            points: crate::overlay::endpoints(at(pose), &bearings, scan.ranges_m(), max_range),
+        },
+        crate::overlay::OverlayScan {
+            name: "endpoints at the grid's best pose".into(),
+            color: plotters::style::RGBColor(0, 170, 60),
+            pose: at(&best.pose),
+            points: crate::overlay::endpoints(
+                at(&best.pose),
+                &bearings,
+                scan.ranges_m(),
+                max_range,
+            ),
+        },
+    ];
+    let view = FieldView::parse(&l.blob).map_err(ScoreCmdError::Blob)?;
+    crate::overlay::draw_overlay(
+        path,
+        &view,
+        &crate::overlay::Overlay {
+            title: &title,
+            center,
+            half_m: a.overlay_half,
+            scans,
+        },
+    )
+    .map_err(|e| ScoreCmdError::Plot(e.0))
 }
 
 /// The x–y surface at θ and the θ profile at (x, y): a CSV (`dx_m,dy_m,dtheta_rad,log_likelihood`)
@@ -245,14 +423,7 @@ fn write_grid<M: SensorModel<MAX_BEAMS>>(
     pose: &Pose,
     prefix: &Path,
 ) -> Result<Vec<String>, ScoreCmdError> {
-    if !(a.grid_step > 0.0 && a.grid_half >= a.grid_step && a.grid_half / a.grid_step <= 500.0) {
-        return Err(usage(
-            "--grid-step must be > 0 and at most --grid-half, with ≤ 500 steps per side",
-        ));
-    }
-    if !(a.grid_half_deg > 0.0 && a.grid_half_deg <= 180.0) {
-        return Err(usage("--grid-half-deg must be in (0, 180]"));
-    }
+    check_grid(a)?;
     let xy = GridSpec {
         half_xy_m: a.grid_half,
         step_xy_m: a.grid_step,
