@@ -81,7 +81,13 @@ pub fn demo(board: Board) -> Result {
     print!("{out}");
     eprint!("{err}");
     match code {
-        0 => Ok(()),
+        0 => {
+            let blob_path = repo_root().join("firmware/assets/intel.bin");
+            let blob =
+                std::fs::read(&blob_path).map_err(|e| format!("{}: {e}", blob_path.display()))?;
+            println!("{}", crate::demo_ref::check(&out, &blob)?);
+            Ok(())
+        }
         124 => Err(format!("the demo did not finish within {QEMU_TIMEOUT_S} s")),
         134 => Err(format!("QEMU stopped with a CPU lockup on `{machine}`")),
         c => Err(format!(

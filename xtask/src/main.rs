@@ -3,6 +3,7 @@
 
 mod budgets;
 mod demo;
+mod demo_ref;
 
 use clap::{Parser, Subcommand};
 use std::collections::BTreeMap;

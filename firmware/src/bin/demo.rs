@@ -27,7 +27,7 @@
 
 use beamfield::{
     normalize_log_weights, BeamLayout, FieldView, Lag1, LikelihoodField, LikelihoodParams, Pose,
-    PreparedScan, Scan, SensorMount, Tempered,
+    Scan, SensorMount, Tempered,
 };
 use beamfield_firmware::{exit, println, Fixed};
 use cortex_m::peripheral::syst::SystClkSource;
@@ -54,70 +54,16 @@ const BEAMS: usize = 180;
 
 include!("../../assets/scans.rs");
 
+#[path = "../demo_plan.rs"]
+mod demo_plan;
+use demo_plan::{
+    fine_search, offset, ACCEPT_DEG, ACCEPT_M, COARSE, FINE, KAPPA, POSES, SIGMA_HIT_M, Z_HIT,
+    Z_RAND,
+};
+
 /// The 5 cm distance field of the Intel map (see `docs/demo.md`).
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
 
-/// A grid of poses around a centre: `xy_steps` offsets per axis in x and y, `th_steps` in
-/// heading, centred on 0.
-#[derive(Clone, Copy)]
-struct Grid {
-    /// Poses per axis in x and y (odd).
-    xy_steps: usize,
-    /// Spacing in x and y, metres.
-    xy_step_m: f32,
-    /// Poses in heading (odd).
-    th_steps: usize,
-    /// Spacing in heading, degrees.
-    th_step_deg: f32,
-}
-
-impl Grid {
-    /// Poses in the grid.
-    const fn len(&self) -> usize {
-        self.xy_steps * self.xy_steps * self.th_steps
-    }
-
-    /// Pose `i` around `centre` (x fastest, then y, then heading).
-    fn pose(&self, centre: &Pose, i: usize) -> Pose {
-        let half_xy = (self.xy_steps / 2) as f32;
-        let half_th = (self.th_steps / 2) as f32;
-        let ix = (i % self.xy_steps) as f32 - half_xy;
-        let iy = ((i / self.xy_steps) % self.xy_steps) as f32 - half_xy;
-        let it = (i / (self.xy_steps * self.xy_steps)) as f32 - half_th;
-        Pose::new(
-            centre.x_m + ix * self.xy_step_m,
-            centre.y_m + iy * self.xy_step_m,
-            beamfield::wrap_angle(centre.theta_rad + (it * self.th_step_deg).to_radians()),
-        )
-    }
-}
-
-/// The hypotheses: offsets −20 … +20 cm in 2.5 cm steps in x and y, −5° … +5° in 0.5° steps.
-const COARSE: Grid = Grid {
-    xy_steps: 17,
-    xy_step_m: 0.025,
-    th_steps: 21,
-    th_step_deg: 0.5,
-};
-/// The same window at 1 cm and 0.25°: only its best pose is kept.
-const FINE: Grid = Grid {
-    xy_steps: 41,
-    xy_step_m: 0.01,
-    th_steps: 41,
-    th_step_deg: 0.25,
-};
-/// Pose hypotheses per scan.
-const POSES: usize = COARSE.len();
-/// Tempering κ: `ln q = (1/κ)·Σ ln p` (models.md §5), as calibrated on this log and map by
-/// `beamfield calibrate` (coverage of the 95 % credible sets: 0.25 at κ = 1, 0.95 at κ = 8.25,
-/// with σ_hit 5 cm; close to, not exactly, this demo's fitted σ_hit).
-const KAPPA: f32 = 8.25;
-/// σ_hit of the likelihood field, metres: the EM fit of the beam model on this log.
-const SIGMA_HIT_M: f32 = 0.0588;
-/// Acceptance (issue 7): position error, metres.
-const ACCEPT_M: f32 = 0.05;
-/// Acceptance (issue 7): heading error, degrees.
-const ACCEPT_DEG: f32 = 1.0;
 /// The SysTick (core) clock, Hz: 25 MHz on mps2-an386 (the default); `cargo xtask demo --board
 /// netduinoplus2` sets `BEAMFIELD_CORE_HZ` to QEMU's STM32F405 clock. Under `-icount shift=0`
 /// one instruction is one nanosecond, so a tick is `1e9 / CORE_HZ` instructions (40 on
@@ -150,36 +96,6 @@ const fn insns(ticks: u64) -> u64 {
 /// SysTick reload: the full 24 bits.
 const SYST_RELOAD: u32 = 0x00FF_FFFF;
 
-/// Index of the best pose of the fine grid around `logged`: the first of the highest score
-/// (scores are never NaN). Untempered (dividing by κ > 0 does not move the maximum), through
-/// `score_with`: the timed coarse loop stays the only caller of `TemperedScan::score`, so the
-/// compiler inlines it there as it did without the fine search, and the instructions per pose
-/// the demo reports are those of the same code.
-#[inline(never)]
-fn fine_search(prepared: &PreparedScan<'_, BEAMS>, logged: &Pose) -> usize {
-    let mut best = (0usize, f32::NEG_INFINITY);
-    for i in 0..FINE.len() {
-        let ll = prepared
-            .score_with(&FINE.pose(logged, i), |_, _| {})
-            .log_likelihood;
-        if ll > best.1 {
-            best = (i, ll);
-        }
-    }
-    best.0
-}
-
-/// Distance (metres) and heading difference (degrees) of `p` from `logged`, and whether they
-/// are within the acceptance.
-fn offset(p: &Pose, logged: &Pose) -> (f32, f32, bool) {
-    let dx = p.x_m - logged.x_m;
-    let dy = p.y_m - logged.y_m;
-    let d_m = beamfield::math::sqrt(dx * dx + dy * dy);
-    let dth_deg = beamfield::wrap_angle(p.theta_rad - logged.theta_rad).to_degrees();
-    let ok = d_m <= ACCEPT_M + 1e-4 && dth_deg.abs() <= ACCEPT_DEG + 1e-3;
-    (d_m, dth_deg, ok)
-}
-
 /// Ticks elapsed between two reads of the down-counting SysTick value.
 fn ticks_between(start: u32, end: u32) -> u32 {
     start.wrapping_sub(end) & SYST_RELOAD
@@ -206,7 +122,7 @@ fn main() -> ! {
     // z_hit and z_rand as AMCL's defaults; σ_hit as fitted to this log by the crate's EM
     // (`beamfield fit --field intel.bin --log intel-corrected.log`: laser_sigma_hit 0.0588 m),
     // instead of AMCL's generic 0.2 m.
-    let params = match LikelihoodParams::new(0.95, 0.05, SIGMA_HIT_M, MAX_RANGE_M) {
+    let params = match LikelihoodParams::new(Z_HIT, Z_RAND, SIGMA_HIT_M, MAX_RANGE_M) {
         Ok(p) => p,
         Err(e) => {
             println!("demo: likelihood parameters rejected: {}", e);
