@@ -35,6 +35,10 @@ pub struct ModelArgs {
     /// z_rand weight.
     #[arg(long = "z-rand", default_value_t = 0.05)]
     pub z_rand: f32,
+    /// The sensor's max-range ("no return") value, metres (default: detected in the log, as
+    /// `beamfield log info` reports it).
+    #[arg(long = "max-range")]
+    pub max_range: Option<f32>,
 }
 
 /// `beamfield score`: log-likelihood of one scan of a log at a pose.
@@ -154,11 +158,20 @@ struct Loaded {
 fn load(m: &ModelArgs) -> Result<Loaded, ScoreCmdError> {
     let blob = std::fs::read(&m.field).map_err(|e| ScoreCmdError::Io(m.field.clone(), e))?;
     FieldView::parse(&blob).map_err(ScoreCmdError::Blob)?;
-    let log = CarmenLog::read_path(&m.log, ReadOptions::default()).map_err(ScoreCmdError::Log)?;
-    let max_range = log
-        .max_range
-        .value_m()
-        .ok_or_else(|| usage("the log's max range could not be detected"))?;
+    let options = ReadOptions {
+        max_range_m: m.max_range,
+        ..ReadOptions::default()
+    };
+    let log = CarmenLog::read_path(&m.log, options).map_err(ScoreCmdError::Log)?;
+    if log.scans.is_empty() {
+        return Err(usage(format!(
+            "{}: no FLASER scans in the log",
+            m.log.display()
+        )));
+    }
+    let max_range = log.max_range.value_m().ok_or_else(|| {
+        usage("the log's max-range value could not be detected: pass --max-range METRES")
+    })?;
     let params = LikelihoodParams::new(m.z_hit, m.z_rand, m.sigma_hit, max_range)
         .map_err(|e| usage(format!("likelihood field parameters: {e}")))?;
     let layout = log

@@ -148,3 +148,50 @@ fn malformed_overlay_centre_is_a_clear_error() {
     assert!(!png.exists());
     std::fs::remove_dir_all(&out).ok();
 }
+
+#[test]
+fn a_log_without_scans_is_named_and_max_range_can_be_given() {
+    let out = std::env::temp_dir().join(format!("beamfield-score-log-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let empty = out.join("empty.log");
+    std::fs::write(&empty, "# a comment\nODOM 0 0 0 0 0 0 1 h 1\n").unwrap();
+    let st = bin()
+        .args(["score", "--field"])
+        .arg(blob_path())
+        .arg("--log")
+        .arg(&empty)
+        .args(["--scan", "0"])
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(err.contains("no FLASER scans"), "{err}");
+
+    // --max-range overrides the detected 81.83 m: at 10 m, readings of 10 m or more become
+    // max-range readings, so fewer beams are scored than with the detected value.
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let st = bin()
+            .args(["--json", "score", "--field"])
+            .arg(blob_path())
+            .arg("--log")
+            .arg(log_path())
+            .args(["--scan", "50"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            st.status.success(),
+            "{}",
+            String::from_utf8_lossy(&st.stderr)
+        );
+        serde_json::from_slice(&st.stdout).unwrap()
+    };
+    let detected = run(&[]);
+    let given = run(&["--max-range", "10"]);
+    let n = |v: &serde_json::Value, k: &str| v[k].as_u64().unwrap();
+    assert!(n(&given, "max_range") > n(&detected, "max_range"));
+    for v in [&detected, &given] {
+        assert_eq!(n(v, "scored") + n(v, "max_range") + n(v, "invalid"), 180);
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
