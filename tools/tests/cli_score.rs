@@ -9,17 +9,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn data_dir() -> PathBuf {
-    if let Some(p) = std::env::var_os("BEAMFIELD_DATA") {
-        return PathBuf::from(p);
-    }
-    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    loop {
-        let c = dir.join("shared").join("data");
-        if c.join("README.md").is_file() {
-            return c;
-        }
-        assert!(dir.pop(), "shared/data not found; set BEAMFIELD_DATA");
-    }
+    host_tests::data_dir()
 }
 
 fn blob_path() -> PathBuf {
