@@ -24,17 +24,27 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_beamfield"))
 }
 
+/// `beamfield [--json] score --field <the demo's blob> --log <the Intel log>`, to which each
+/// test adds its options.
+fn score(json: bool) -> Command {
+    let mut c = bin();
+    if json {
+        c.arg("--json");
+    }
+    c.args(["score", "--field"])
+        .arg(blob_path())
+        .arg("--log")
+        .arg(log_path());
+    c
+}
+
 #[test]
 fn overlay_reports_the_grid_best_and_draws_it() {
     let out = std::env::temp_dir().join(format!("beamfield-score-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     let png = out.join("overlay.png");
     let scan_index = 728usize;
-    let st = bin()
-        .args(["--json", "score", "--field"])
-        .arg(blob_path())
-        .arg("--log")
-        .arg(log_path())
+    let st = score(true)
         .args(["--scan", &scan_index.to_string(), "--sigma-hit", "0.0588"])
         .args([
             "--grid-half",
@@ -117,11 +127,7 @@ fn malformed_overlay_centre_is_a_clear_error() {
     let out = std::env::temp_dir().join(format!("beamfield-score-bad-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     let png = out.join("never.png");
-    let st = bin()
-        .args(["score", "--field"])
-        .arg(blob_path())
-        .arg("--log")
-        .arg(log_path())
+    let st = score(false)
         .args(["--scan", "50", "--grid-half", "0.02", "--grid-step", "0.01"])
         .args([
             "--grid-half-deg",
@@ -160,11 +166,7 @@ fn a_log_without_scans_is_named_and_max_range_can_be_given() {
     // --max-range overrides the detected 81.83 m: at 10 m, readings of 10 m or more become
     // max-range readings, so fewer beams are scored than with the detected value.
     let run = |extra: &[&str]| -> serde_json::Value {
-        let st = bin()
-            .args(["--json", "score", "--field"])
-            .arg(blob_path())
-            .arg("--log")
-            .arg(log_path())
+        let st = score(true)
             .args(["--scan", "50"])
             .args(extra)
             .output()
