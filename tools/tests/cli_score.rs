@@ -20,6 +20,13 @@ fn log_path() -> PathBuf {
     data_dir().join("laser_intel_lab/intel-corrected.log")
 }
 
+/// A fresh scratch directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let out = std::env::temp_dir().join(format!("beamfield-score-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    out
+}
+
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_beamfield"))
 }
@@ -40,8 +47,7 @@ fn score(json: bool) -> Command {
 
 #[test]
 fn overlay_reports_the_grid_best_and_draws_it() {
-    let out = std::env::temp_dir().join(format!("beamfield-score-{}", std::process::id()));
-    std::fs::create_dir_all(&out).unwrap();
+    let out = scratch("overlay");
     let png = out.join("overlay.png");
     let scan_index = 728usize;
     let st = score(true)
@@ -124,8 +130,7 @@ fn overlay_reports_the_grid_best_and_draws_it() {
 
 #[test]
 fn malformed_overlay_centre_is_a_clear_error() {
-    let out = std::env::temp_dir().join(format!("beamfield-score-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&out).unwrap();
+    let out = scratch("bad");
     let png = out.join("never.png");
     let st = score(false)
         .args(["--scan", "50", "--grid-half", "0.02", "--grid-step", "0.01"])
@@ -147,8 +152,7 @@ fn malformed_overlay_centre_is_a_clear_error() {
 
 #[test]
 fn a_log_without_scans_is_named_and_max_range_can_be_given() {
-    let out = std::env::temp_dir().join(format!("beamfield-score-log-{}", std::process::id()));
-    std::fs::create_dir_all(&out).unwrap();
+    let out = scratch("log");
     let empty = out.join("empty.log");
     std::fs::write(&empty, "# a comment\nODOM 0 0 0 0 0 0 1 h 1\n").unwrap();
     let st = bin()

@@ -118,6 +118,18 @@ fn close(what: &str, printed: f64, host: f32, decimals: i32) -> Result<(), Strin
     }
 }
 
+/// [`close`] for a printed pose `(x, y, θ°)`: metres to 3 decimals, degrees to `deg_decimals`.
+fn close_pose(what: &str, printed: [f64; 3], host: &Pose, deg_decimals: i32) -> Result<(), String> {
+    close(&format!("{what} x"), printed[0], host.x_m, 3)?;
+    close(&format!("{what} y"), printed[1], host.y_m, 3)?;
+    close(
+        &format!("{what} θ"),
+        printed[2],
+        host.theta_rad.to_degrees(),
+        deg_decimals,
+    )
+}
+
 /// Recomputes every scan on the host and checks the device's report `out` against it: per
 /// scan the best hypothesis (pose, weight, ESS, lag-1), the fine grid's best pose and its
 /// within/OUTSIDE verdict. Returns a one-line summary.
@@ -141,14 +153,7 @@ pub fn check(out: &str, blob: &[u8]) -> Result<String, String> {
         let bad = |what: &str| format!("scan {}: cannot read {what} in {line:?}", r.log_index);
         let s = r.log_index;
         let b = pose_after(line, "best (").ok_or_else(|| bad("the best pose"))?;
-        close(&format!("scan {s} best x"), b[0], r.best.x_m, 3)?;
-        close(&format!("scan {s} best y"), b[1], r.best.y_m, 3)?;
-        close(
-            &format!("scan {s} best θ"),
-            b[2],
-            r.best.theta_rad.to_degrees(),
-            1,
-        )?;
+        close_pose(&format!("scan {s} best"), b, &r.best, 1)?;
         let w = number_after(line, "weight ").ok_or_else(|| bad("the weight"))?;
         close(&format!("scan {s} weight"), w, r.weight, 3)?;
         let e = number_after(line, "ESS ").ok_or_else(|| bad("the ESS"))?;
@@ -156,14 +161,7 @@ pub fn check(out: &str, blob: &[u8]) -> Result<String, String> {
         let l = number_after(line, "lag-1 ").ok_or_else(|| bad("lag-1"))?;
         close(&format!("scan {s} lag-1"), l, r.lag1, 2)?;
         let f = pose_after(fine_line, "fine best (").ok_or_else(|| bad("the fine best pose"))?;
-        close(&format!("scan {s} fine x"), f[0], r.fine.x_m, 3)?;
-        close(&format!("scan {s} fine y"), f[1], r.fine.y_m, 3)?;
-        close(
-            &format!("scan {s} fine θ"),
-            f[2],
-            r.fine.theta_rad.to_degrees(),
-            2,
-        )?;
+        close_pose(&format!("scan {s} fine"), f, &r.fine, 2)?;
         let verdict = if r.within { "within" } else { "OUTSIDE" };
         if !fine_line.trim_end().ends_with(verdict) {
             return Err(format!("scan {s}: the host says {verdict}: {fine_line:?}"));
