@@ -16,6 +16,9 @@
 #[path = "../common/intel_race.rs"]
 mod intel_race;
 
+#[path = "../common/amcl_beam.rs"]
+mod amcl_beam;
+
 use beamfield::{SensorModel, Stride};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use intel_race::N;
@@ -40,6 +43,33 @@ fn race(c: &mut Criterion) {
     );
 
     cast_work_histogram(&beam, &data);
+
+    // The AMCL-style baseline (Bresenham casts, f64 mixture, `p += pz³`) on the same walls.
+    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), beam.model().intrinsics());
+    let bearings: Vec<f64> = layout
+        .beams()
+        .iter()
+        .map(|b| f64::from(b.bearing_rad))
+        .collect();
+    let mut diffs: Vec<f64> = Vec::with_capacity(beams);
+    let mut z_star = [0.0f32; N];
+    for (_, _, pose) in scans {
+        beam.cast_layout(layout, pose, Stride::ONE, &mut z_star);
+        for (&z, &b) in z_star.iter().zip(&bearings) {
+            let a = f64::from(pose.theta_rad) + b;
+            let r = amcl.calc_range(f64::from(pose.x_m), f64::from(pose.y_m), a);
+            diffs.push((r - f64::from(z)).abs() / f64::from(beam.caster().view().cell_size_m()));
+        }
+    }
+    diffs.sort_by(f64::total_cmp);
+    let within = |cells: f64| diffs.iter().filter(|&&d| d <= cells).count();
+    eprintln!(
+        "race: AMCL-style Bresenham z* vs the crate's cast, |difference| in cells: median {:.2}, 95th percentile {:.2}; within 1 cell {}, within 2 cells {} of {beams}",
+        diffs[diffs.len() / 2],
+        diffs[diffs.len() * 95 / 100],
+        within(1.0),
+        within(2.0)
+    );
     for min_jump in [1.0f32, 3.0, 5.0, 8.0, 12.0] {
         let tuned = beamfield::BeamFieldModel::new(
             *beam.model(),
@@ -108,7 +138,37 @@ fn race(c: &mut Criterion) {
             acc
         })
     });
-    let mut z_star = [0.0f32; N];
+    g.bench_function("amcl_style_beam_model", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f64;
+            for (_, scan, pose) in scans {
+                let beams = scan
+                    .ranges_m()
+                    .iter()
+                    .copied()
+                    .zip(bearings.iter().copied());
+                acc += amcl.score(beams, black_box(pose));
+            }
+            acc
+        })
+    });
+    g.bench_function("amcl_style_raycast_only", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f64;
+            for (_, _, pose) in scans {
+                let (x, y, t) = (
+                    f64::from(black_box(pose).x_m),
+                    f64::from(pose.y_m),
+                    f64::from(pose.theta_rad),
+                );
+                acc += bearings
+                    .iter()
+                    .map(|&b| amcl.calc_range(x, y, t + b))
+                    .sum::<f64>();
+            }
+            acc
+        })
+    });
     g.bench_function("raycast_only", |b| {
         b.iter(|| {
             let mut acc = 0.0f32;
