@@ -4,11 +4,18 @@
 //!
 //! `cargo build --release -p host-tests --example cast_profile`, then
 //! `valgrind --tool=cachegrind --branch-sim=yes target/release/examples/cast_profile 3`;
-//! `0` repetitions runs only the harness (its own count, to subtract). Prints the checksum of
-//! the ranges, so two builds can be checked to cast the same.
+//! `0` repetitions runs only the harness (its own count, to subtract). A second argument picks
+//! what is cast: `crate` (default, `BeamFieldModel::cast_layout`), `one` (the crate's casts one
+//! ray at a time, `RayCaster::cast_dir`) or `amcl` (the race's AMCL-style Bresenham baseline).
+//! Prints the checksum of the ranges, so two builds can be checked to cast the same.
 
 #[path = "../common/intel_race.rs"]
 mod intel_race;
+
+// Only the casts are profiled here, not the baseline's mixture.
+#[allow(dead_code)]
+#[path = "../common/amcl_beam.rs"]
+mod amcl_beam;
 
 use beamfield::Stride;
 use std::hint::black_box;
@@ -17,18 +24,45 @@ fn main() {
     let reps: usize = std::env::args()
         .nth(1)
         .map_or(3, |s| s.parse().expect("repetitions: a whole number"));
+    let which = std::env::args().nth(2).unwrap_or_else(|| "crate".into());
     let data = intel_race::load();
     let (beam, _) = intel_race::models(&data);
+    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), beam.model().intrinsics());
+    let max = data.max_range_m;
     let mut z_star = [0.0f32; intel_race::N];
     let mut sum = 0.0f64;
     for _ in 0..reps {
         for (_, _, pose) in &data.scans {
-            beam.cast_layout(&data.layout, black_box(pose), Stride::ONE, &mut z_star);
+            let pose = black_box(pose);
+            match which.as_str() {
+                "crate" => beam.cast_layout(&data.layout, pose, Stride::ONE, &mut z_star),
+                "one" => {
+                    for (z, b) in z_star.iter_mut().zip(data.layout.beams()) {
+                        *z = beam.caster().cast(
+                            pose.x_m,
+                            pose.y_m,
+                            pose.theta_rad + b.bearing_rad,
+                            max,
+                        );
+                    }
+                }
+                "amcl" => {
+                    let (x, y, t) = (
+                        f64::from(pose.x_m),
+                        f64::from(pose.y_m),
+                        f64::from(pose.theta_rad),
+                    );
+                    for (z, b) in z_star.iter_mut().zip(data.layout.beams()) {
+                        *z = amcl.calc_range(x, y, t + f64::from(b.bearing_rad)) as f32;
+                    }
+                }
+                other => panic!("unknown caster {other}: crate, one or amcl"),
+            }
             sum += z_star.iter().map(|&z| f64::from(z)).sum::<f64>();
         }
     }
     println!(
-        "{reps} repetitions of {} casts; sum of ranges {sum:.6} m",
+        "{which}: {reps} repetitions of {} casts; sum of ranges {sum:.6} m",
         data.scans.len() * intel_race::N
     );
 }
