@@ -2,7 +2,9 @@
 //! ray casting (`BeamFieldModel`) against the likelihood field (`LikelihoodField::score`), both
 //! scoring whole scans of the Intel lab log at their logged poses, against the demo firmware's
 //! blob of the Intel map. Baselines measured in the same run over the same readings: a loop
-//! that only sums the ranges, and one `f32::ln` per beam (as `benches/beam.rs`).
+//! that only sums the ranges, one `f32::ln` per beam (as `benches/beam.rs`), and an AMCL-style
+//! beam model (`common/amcl_beam.rs`: Bresenham casts, f64 mixture, `p += pz³`) on the same
+//! walls, whole and its casts alone.
 //!
 //! Run: `cargo bench -p host-tests --bench race`. One iteration scores all 91 scans (every 10th
 //! of the 910, 16,380 beams): criterion's "thrpt" is in scan evaluations per second (÷1000:
