@@ -21,6 +21,9 @@ mod intel_race;
 #[path = "../common/amcl_beam.rs"]
 mod amcl_beam;
 
+#[path = "../common/race_passes.rs"]
+mod race_passes;
+
 use beamfield::{SensorModel, Stride};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use intel_race::N;
@@ -46,32 +49,10 @@ fn race(c: &mut Criterion) {
 
     cast_work_histogram(&beam, &data);
 
-    // The AMCL-style baseline (Bresenham casts, f64 mixture, `p += pz³`) on the same walls.
-    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), beam.model().intrinsics());
-    let bearings: Vec<f64> = layout
-        .beams()
-        .iter()
-        .map(|b| f64::from(b.bearing_rad))
-        .collect();
-    let mut diffs: Vec<f64> = Vec::with_capacity(beams);
-    let mut z_star = [0.0f32; N];
-    for (_, _, pose) in scans {
-        beam.cast_layout(layout, pose, Stride::ONE, &mut z_star);
-        for (&z, &b) in z_star.iter().zip(&bearings) {
-            let a = f64::from(pose.theta_rad) + b;
-            let r = amcl.calc_range(f64::from(pose.x_m), f64::from(pose.y_m), a);
-            diffs.push((r - f64::from(z)).abs() / f64::from(beam.caster().view().cell_size_m()));
-        }
-    }
-    diffs.sort_by(f64::total_cmp);
-    let within = |cells: f64| diffs.iter().filter(|&&d| d <= cells).count();
-    eprintln!(
-        "race: AMCL-style Bresenham z* vs the crate's cast, |difference| in cells: median {:.2}, 95th percentile {:.2}; within 1 cell {}, within 2 cells {} of {beams}",
-        diffs[diffs.len() / 2],
-        diffs[diffs.len() * 95 / 100],
-        within(1.0),
-        within(2.0)
-    );
+    // The AMCL-style baseline (Bresenham casts, f64 mixture, `p += pz³`) on the same walls;
+    // `tests/race_amcl_baseline.rs` checks that it sees them.
+    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), layout, beam.model().intrinsics());
+
     for min_jump in [1.0f32, 3.0, 5.0, 8.0, 12.0] {
         let tuned = beamfield::BeamFieldModel::new(
             *beam.model(),
@@ -110,77 +91,24 @@ fn race(c: &mut Criterion) {
         })
     });
     g.bench_function("baseline_ln_per_beam", |b| {
-        b.iter(|| {
-            let mut acc = 0.0f32;
-            for (_, scan, _) in black_box(scans) {
-                acc += scan
-                    .ranges_m()
-                    .iter()
-                    .map(|&z| z.min(max).ln())
-                    .sum::<f32>();
-            }
-            acc
-        })
+        b.iter(|| race_passes::ln_per_beam(&data))
     });
     g.bench_function("likelihood_field", |b| {
-        b.iter(|| {
-            let mut acc = 0.0f32;
-            for (_, scan, pose) in scans {
-                acc += field.score(layout, scan, black_box(pose)).log_likelihood;
-            }
-            acc
-        })
+        b.iter(|| race_passes::likelihood_field(&field, &data))
     });
     g.bench_function("beam_model_raycast", |b| {
-        b.iter(|| {
-            let mut acc = 0.0f32;
-            for (_, scan, pose) in scans {
-                acc += beam.score(layout, scan, black_box(pose)).log_likelihood;
-            }
-            acc
-        })
+        b.iter(|| race_passes::beam_model(&beam, &data))
     });
     g.bench_function("amcl_style_beam_model", |b| {
-        b.iter(|| {
-            let mut acc = 0.0f64;
-            for (_, scan, pose) in scans {
-                let beams = scan
-                    .ranges_m()
-                    .iter()
-                    .copied()
-                    .zip(bearings.iter().copied());
-                acc += amcl.score(beams, black_box(pose));
-            }
-            acc
-        })
+        b.iter(|| race_passes::amcl_beam_model(&amcl, &data))
     });
     g.bench_function("amcl_style_raycast_only", |b| {
-        b.iter(|| {
-            let mut acc = 0.0f64;
-            for (_, _, pose) in scans {
-                let (x, y, t) = (
-                    f64::from(black_box(pose).x_m),
-                    f64::from(pose.y_m),
-                    f64::from(pose.theta_rad),
-                );
-                acc += bearings
-                    .iter()
-                    .map(|&b| amcl.calc_range(x, y, t + b))
-                    .sum::<f64>();
-            }
-            acc
-        })
+        b.iter(|| race_passes::amcl_casts(&amcl, &data))
     });
     g.bench_function("raycast_only", |b| {
-        b.iter(|| {
-            let mut acc = 0.0f32;
-            for (_, _, pose) in scans {
-                beam.cast_layout(layout, black_box(pose), Stride::ONE, &mut z_star);
-                acc += z_star.iter().sum::<f32>();
-            }
-            acc
-        })
+        b.iter(|| race_passes::casts(&beam, &data))
     });
+    let mut z_star = [0.0f32; N];
     // The batch cast (`RayCaster::cast_dirs`) with other lane counts than the default, whole
     // scans at once (the model casts blocks of `CAST_BLOCK` beams); 1 lane = one ray at a time.
     let dirs_of = |pose: &beamfield::Pose| -> [[f32; 2]; N] {

@@ -14,7 +14,7 @@
 //! the blob does not keep them (unknown is not occupied there), so both models see the same
 //! walls.
 
-use beamfield::{BeamIntrinsics, FieldView, Pose};
+use beamfield::{BeamIntrinsics, BeamLayout, FieldView, Pose};
 
 /// One grid cell as AMCL stores it: occupancy state (−1 free, +1 occupied) and the distance to
 /// the nearest occupied cell (unused by the beam model; it is there for the memory layout).
@@ -25,9 +25,11 @@ struct Cell {
     dist: f64,
 }
 
-/// The map and the beam model's parameters, f64 throughout.
+/// The map, the beams' bearings and the beam model's parameters, f64 throughout.
 pub struct AmclBeam {
     cells: Vec<Cell>,
+    /// Bearing of each beam of the layout, radians (the layout's, widened).
+    bearings: Vec<f64>,
     width: i64,
     height: i64,
     res: f64,
@@ -42,8 +44,12 @@ pub struct AmclBeam {
 }
 
 impl AmclBeam {
-    /// The blob's walls and the beam model's intrinsics.
-    pub fn new(view: &FieldView<'_>, intr: &BeamIntrinsics) -> Self {
+    /// The blob's walls, the layout's bearings and the beam model's intrinsics.
+    pub fn new<const N: usize>(
+        view: &FieldView<'_>,
+        layout: &BeamLayout<N>,
+        intr: &BeamIntrinsics,
+    ) -> Self {
         let h = view.header();
         let cells = view
             .codes()
@@ -56,6 +62,11 @@ impl AmclBeam {
         let w = intr.weights();
         Self {
             cells,
+            bearings: layout
+                .beams()
+                .iter()
+                .map(|b| f64::from(b.bearing_rad))
+                .collect(),
             width: i64::from(h.width),
             height: i64::from(h.height),
             res: f64::from(h.cell_size_m),
@@ -134,9 +145,22 @@ impl AmclBeam {
         }
     }
 
-    /// The scan's AMCL weight factor `Σ pz³` over the beams `(range_m, bearing_rad)` at `pose`
-    /// (the laser's pose; no mount offset).
-    pub fn score(&self, beams: impl Iterator<Item = (f32, f64)>, pose: &Pose) -> f64 {
+    /// `z*` (metres) of every beam of the layout from `pose` (the laser's pose; no mount
+    /// offset) into `out` (a shorter `out` receives what fits).
+    pub fn cast_scan(&self, pose: &Pose, out: &mut [f64]) {
+        let (x, y, t) = (
+            f64::from(pose.x_m),
+            f64::from(pose.y_m),
+            f64::from(pose.theta_rad),
+        );
+        for (o, &b) in out.iter_mut().zip(&self.bearings) {
+            *o = self.calc_range(x, y, t + b);
+        }
+    }
+
+    /// The scan's AMCL weight factor `Σ pz³` over the readings `ranges_m` (beam `k` of the
+    /// layout) at `pose` (the laser's pose; no mount offset).
+    pub fn score(&self, ranges_m: &[f32], pose: &Pose) -> f64 {
         let (px, py, pa) = (
             f64::from(pose.x_m),
             f64::from(pose.y_m),
@@ -144,7 +168,7 @@ impl AmclBeam {
         );
         let denom = 2.0 * self.sigma * self.sigma;
         let mut p = 0.0;
-        for (r, bearing) in beams {
+        for (&r, &bearing) in ranges_m.iter().zip(&self.bearings) {
             let obs = f64::from(r).min(self.max_range);
             if obs.is_nan() || obs < 0.0 {
                 continue;

@@ -27,7 +27,12 @@ fn main() {
     let which = std::env::args().nth(2).unwrap_or_else(|| "crate".into());
     let data = intel_race::load();
     let (beam, _) = intel_race::models(&data);
-    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), beam.model().intrinsics());
+    let amcl = amcl_beam::AmclBeam::new(
+        beam.caster().view(),
+        &data.layout,
+        beam.model().intrinsics(),
+    );
+    let mut z_amcl = [0.0f64; intel_race::N];
     let max = data.max_range_m;
     let mut z_star = [0.0f32; intel_race::N];
     let mut sum = 0.0f64;
@@ -47,13 +52,9 @@ fn main() {
                     }
                 }
                 "amcl" => {
-                    let (x, y, t) = (
-                        f64::from(pose.x_m),
-                        f64::from(pose.y_m),
-                        f64::from(pose.theta_rad),
-                    );
-                    for (z, b) in z_star.iter_mut().zip(data.layout.beams()) {
-                        *z = amcl.calc_range(x, y, t + f64::from(b.bearing_rad)) as f32;
+                    amcl.cast_scan(pose, &mut z_amcl);
+                    for (z, &a) in z_star.iter_mut().zip(&z_amcl) {
+                        *z = a as f32;
                     }
                 }
                 other => panic!("unknown caster {other}: crate, one or amcl"),

@@ -13,7 +13,9 @@ mod intel_race;
 #[path = "../common/amcl_beam.rs"]
 mod amcl_beam;
 
-use beamfield::{SensorModel, Stride};
+#[path = "../common/race_passes.rs"]
+mod race_passes;
+
 use intel_race::N;
 use std::hint::black_box;
 use std::time::Instant;
@@ -27,98 +29,38 @@ fn main() {
         .map_or(50, |s| s.parse().expect("rounds: a whole number"));
     let data = intel_race::load();
     let (beam, field) = intel_race::models(&data);
-    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), beam.model().intrinsics());
-    let layout = &data.layout;
-    let scans = &data.scans;
-    let max = data.max_range_m;
-    let bearings: Vec<f64> = layout
-        .beams()
-        .iter()
-        .map(|b| f64::from(b.bearing_rad))
-        .collect();
-    let beams = (scans.len() * N) as f64;
+    let amcl = amcl_beam::AmclBeam::new(
+        beam.caster().view(),
+        &data.layout,
+        beam.model().intrinsics(),
+    );
+    let beams = (data.scans.len() * N) as f64;
 
     type Variant<'a> = (&'a str, Box<dyn Fn() -> f64 + 'a>);
     let variants: Vec<Variant<'_>> = vec![
         (
             "baseline: one f32 ln per beam",
-            Box::new(|| {
-                let mut acc = 0.0f32;
-                for (_, scan, _) in black_box(scans) {
-                    acc += scan
-                        .ranges_m()
-                        .iter()
-                        .map(|&z| z.min(max).ln())
-                        .sum::<f32>();
-                }
-                f64::from(acc)
-            }),
+            Box::new(|| f64::from(race_passes::ln_per_beam(&data))),
         ),
         (
             "likelihood field (score)",
-            Box::new(|| {
-                let mut acc = 0.0f32;
-                for (_, scan, pose) in scans {
-                    acc += field.score(layout, scan, black_box(pose)).log_likelihood;
-                }
-                f64::from(acc)
-            }),
+            Box::new(|| f64::from(race_passes::likelihood_field(&field, &data))),
         ),
         (
             "beam model, casts through the blob",
-            Box::new(|| {
-                let mut acc = 0.0f32;
-                for (_, scan, pose) in scans {
-                    acc += beam.score(layout, scan, black_box(pose)).log_likelihood;
-                }
-                f64::from(acc)
-            }),
+            Box::new(|| f64::from(race_passes::beam_model(&beam, &data))),
         ),
         (
             "casts alone (cast_layout)",
-            Box::new(|| {
-                let mut z_star = [0.0f32; N];
-                let mut acc = 0.0f32;
-                for (_, _, pose) in scans {
-                    beam.cast_layout(layout, black_box(pose), Stride::ONE, &mut z_star);
-                    acc += z_star.iter().sum::<f32>();
-                }
-                f64::from(acc)
-            }),
+            Box::new(|| f64::from(race_passes::casts(&beam, &data))),
         ),
         (
             "AMCL-style beam model (Bresenham, f64)",
-            Box::new(|| {
-                let mut acc = 0.0f64;
-                for (_, scan, pose) in scans {
-                    let b = scan
-                        .ranges_m()
-                        .iter()
-                        .copied()
-                        .zip(bearings.iter().copied());
-                    acc += amcl.score(b, black_box(pose));
-                }
-                acc
-            }),
+            Box::new(|| race_passes::amcl_beam_model(&amcl, &data)),
         ),
         (
             "AMCL-style casts alone",
-            Box::new(|| {
-                let mut acc = 0.0f64;
-                for (_, _, pose) in scans {
-                    let pose = black_box(pose);
-                    let (x, y, t) = (
-                        f64::from(pose.x_m),
-                        f64::from(pose.y_m),
-                        f64::from(pose.theta_rad),
-                    );
-                    acc += bearings
-                        .iter()
-                        .map(|&b| amcl.calc_range(x, y, t + b))
-                        .sum::<f64>();
-                }
-                acc
-            }),
+            Box::new(|| race_passes::amcl_casts(&amcl, &data)),
         ),
     ];
 

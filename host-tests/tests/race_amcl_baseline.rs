@@ -26,15 +26,15 @@ fn amcl_style_casts_agree_with_the_crate() {
     let (beam, _) = intel_race::models(&data);
     let view = beam.caster().view();
     let cell = f64::from(view.cell_size_m());
-    let amcl = amcl_beam::AmclBeam::new(view, beam.model().intrinsics());
+    let amcl = amcl_beam::AmclBeam::new(view, &data.layout, beam.model().intrinsics());
     let mut diffs = Vec::new();
     let mut short_on_map = 0usize;
     let mut z_star = [0.0f32; N];
+    let mut z_amcl = [0.0f64; N];
     for (_, _, pose) in &data.scans {
         beam.cast_layout(&data.layout, pose, Stride::ONE, &mut z_star);
-        for (&z, b) in z_star.iter().zip(data.layout.beams()) {
-            let a = f64::from(pose.theta_rad) + f64::from(b.bearing_rad);
-            let r = amcl.calc_range(f64::from(pose.x_m), f64::from(pose.y_m), a);
+        amcl.cast_scan(pose, &mut z_amcl);
+        for (&z, &r) in z_star.iter().zip(&z_amcl) {
             diffs.push((r - f64::from(z)) / cell);
             if r < f64::from(z) - 2.0 * cell {
                 short_on_map += usize::from(z < data.max_range_m);
@@ -64,24 +64,15 @@ fn amcl_style_casts_agree_with_the_crate() {
 fn amcl_style_weight_prefers_the_logged_pose() {
     let data = intel_race::load();
     let (beam, _) = intel_race::models(&data);
-    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), beam.model().intrinsics());
-    let bearings: Vec<f64> = data
-        .layout
-        .beams()
-        .iter()
-        .map(|b| f64::from(b.bearing_rad))
-        .collect();
+    let amcl = amcl_beam::AmclBeam::new(
+        beam.caster().view(),
+        &data.layout,
+        beam.model().intrinsics(),
+    );
     let (mut amcl_wins, mut crate_wins) = (0usize, 0usize);
     for (_, scan, pose) in &data.scans {
         let moved = Pose::new(pose.x_m + 0.2, pose.y_m, pose.theta_rad);
-        let w = |p: &Pose| {
-            let beams = scan
-                .ranges_m()
-                .iter()
-                .copied()
-                .zip(bearings.iter().copied());
-            amcl.score(beams, p)
-        };
+        let w = |p: &Pose| amcl.score(scan.ranges_m(), p);
         let (here, there) = (w(pose), w(&moved));
         assert!(here.is_finite() && here > 0.0, "AMCL-style weight {here}");
         amcl_wins += usize::from(here > there);
