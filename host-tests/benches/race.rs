@@ -51,7 +51,7 @@ fn race(c: &mut Criterion) {
 
     // The AMCL-style baseline (Bresenham casts, f64 mixture, `p += pz³`) on the same walls;
     // `tests/race_amcl_baseline.rs` checks that it sees them.
-    let amcl = amcl_beam::AmclBeam::new(beam.caster().view(), layout, beam.model().intrinsics());
+    let amcl = amcl_beam::AmclBeam::like(&beam, layout);
 
     for min_jump in [1.0f32, 3.0, 5.0, 8.0, 12.0] {
         let tuned = beamfield::BeamFieldModel::new(

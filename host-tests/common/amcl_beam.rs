@@ -14,7 +14,7 @@
 //! the blob does not keep them (unknown is not occupied there), so both models see the same
 //! walls.
 
-use beamfield::{BeamIntrinsics, BeamLayout, FieldView, Pose};
+use beamfield::{BeamFieldModel, BeamIntrinsics, BeamLayout, FieldView, Pose};
 
 /// One grid cell as AMCL stores it: occupancy state (−1 free, +1 occupied) and the distance to
 /// the nearest occupied cell (unused by the beam model; it is there for the memory layout).
@@ -79,6 +79,11 @@ impl AmclBeam {
             lambda: f64::from(intr.lambda_short_per_m()),
             max_range: f64::from(intr.max_range_m()),
         }
+    }
+
+    /// The same walls (the caster's blob), layout and intrinsics as the crate's `beam`.
+    pub fn like<const N: usize>(beam: &BeamFieldModel<'_>, layout: &BeamLayout<N>) -> Self {
+        Self::new(beam.caster().view(), layout, beam.model().intrinsics())
     }
 
     /// The cell holding world point `(x, y)`: `floor((x − origin)/res)`.

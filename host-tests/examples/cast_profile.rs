@@ -27,11 +27,7 @@ fn main() {
     let which = std::env::args().nth(2).unwrap_or_else(|| "crate".into());
     let data = intel_race::load();
     let (beam, _) = intel_race::models(&data);
-    let amcl = amcl_beam::AmclBeam::new(
-        beam.caster().view(),
-        &data.layout,
-        beam.model().intrinsics(),
-    );
+    let amcl = amcl_beam::AmclBeam::like(&beam, &data.layout);
     let mut z_amcl = [0.0f64; intel_race::N];
     let max = data.max_range_m;
     let mut z_star = [0.0f32; intel_race::N];

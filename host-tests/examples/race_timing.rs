@@ -29,11 +29,7 @@ fn main() {
         .map_or(50, |s| s.parse().expect("rounds: a whole number"));
     let data = intel_race::load();
     let (beam, field) = intel_race::models(&data);
-    let amcl = amcl_beam::AmclBeam::new(
-        beam.caster().view(),
-        &data.layout,
-        beam.model().intrinsics(),
-    );
+    let amcl = amcl_beam::AmclBeam::like(&beam, &data.layout);
     let beams = (data.scans.len() * N) as f64;
 
     type Variant<'a> = (&'a str, Box<dyn Fn() -> f64 + 'a>);

@@ -26,7 +26,7 @@ fn amcl_style_casts_agree_with_the_crate() {
     let (beam, _) = intel_race::models(&data);
     let view = beam.caster().view();
     let cell = f64::from(view.cell_size_m());
-    let amcl = amcl_beam::AmclBeam::new(view, &data.layout, beam.model().intrinsics());
+    let amcl = amcl_beam::AmclBeam::like(&beam, &data.layout);
     let mut diffs = Vec::new();
     let mut short_on_map = 0usize;
     let mut z_star = [0.0f32; N];
@@ -64,11 +64,7 @@ fn amcl_style_casts_agree_with_the_crate() {
 fn amcl_style_weight_prefers_the_logged_pose() {
     let data = intel_race::load();
     let (beam, _) = intel_race::models(&data);
-    let amcl = amcl_beam::AmclBeam::new(
-        beam.caster().view(),
-        &data.layout,
-        beam.model().intrinsics(),
-    );
+    let amcl = amcl_beam::AmclBeam::like(&beam, &data.layout);
     let (mut amcl_wins, mut crate_wins) = (0usize, 0usize);
     for (_, scan, pose) in &data.scans {
         let moved = Pose::new(pose.x_m + 0.2, pose.y_m, pose.theta_rad);
