@@ -1,13 +1,12 @@
 //! The `beamfield log info` and `beamfield map from-log` commands, run as a user would.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
+
+mod common;
 
 fn beamfield(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_beamfield"))
-        .args(args)
-        .output()
-        .unwrap()
+    common::bin().args(args).output().unwrap()
 }
 
 fn intel() -> String {

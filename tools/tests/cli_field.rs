@@ -2,15 +2,14 @@
 
 use std::io::Write;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 
 fn data_dir() -> PathBuf {
     host_tests::data_dir()
 }
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_beamfield"))
-}
+mod common;
+use common::{bin, run_json};
 
 #[test]
 fn build_query_render() {
@@ -18,19 +17,13 @@ fn build_query_render() {
     std::fs::create_dir_all(&out).unwrap();
     let blob = out.join("tb3.bin");
     let map = data_dir().join("map_turtlebot3_world/map.yaml");
-    let st = bin()
-        .args(["--json", "field", "build"])
-        .arg(&map)
-        .arg("-o")
-        .arg(&blob)
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
+    let report = run_json(
+        bin()
+            .args(["--json", "field", "build"])
+            .arg(&map)
+            .arg("-o")
+            .arg(&blob),
     );
-    let report: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     assert_eq!(report["width"], 384);
     assert_eq!(report["occupied_cells"], 795);
     assert_eq!(report["bytes"], 48 + 384 * 384);

@@ -8,6 +8,9 @@ use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use std::path::PathBuf;
 use std::process::Command;
 
+mod common;
+use common::{bin, run_json};
+
 fn data_dir() -> PathBuf {
     host_tests::data_dir()
 }
@@ -25,10 +28,6 @@ fn scratch(name: &str) -> PathBuf {
     let out = std::env::temp_dir().join(format!("beamfield-score-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&out).unwrap();
     out
-}
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_beamfield"))
 }
 
 /// `beamfield [--json] score --field <the demo's blob> --log <the Intel log>`, to which each
@@ -50,26 +49,20 @@ fn overlay_reports_the_grid_best_and_draws_it() {
     let out = scratch("overlay");
     let png = out.join("overlay.png");
     let scan_index = 728usize;
-    let st = score(true)
-        .args(["--scan", &scan_index.to_string(), "--sigma-hit", "0.0588"])
-        .args([
-            "--grid-half",
-            "0.06",
-            "--grid-step",
-            "0.01",
-            "--grid-half-deg",
-            "1",
-        ])
-        .arg("--overlay")
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        st.status.success(),
-        "{}",
-        String::from_utf8_lossy(&st.stderr)
+    let v = run_json(
+        score(true)
+            .args(["--scan", &scan_index.to_string(), "--sigma-hit", "0.0588"])
+            .args([
+                "--grid-half",
+                "0.06",
+                "--grid-step",
+                "0.01",
+                "--grid-half-deg",
+                "1",
+            ])
+            .arg("--overlay")
+            .arg(&png),
     );
-    let v: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     let best = &v["best_grid_pose"];
     // 13 × 13 positions, 9 headings (±1° in 0.25° steps).
     assert_eq!(best["grid_poses"], 13 * 13 * 9);
@@ -170,17 +163,7 @@ fn a_log_without_scans_is_named_and_max_range_can_be_given() {
     // --max-range overrides the detected 81.83 m: at 10 m, readings of 10 m or more become
     // max-range readings, so fewer beams are scored than with the detected value.
     let run = |extra: &[&str]| -> serde_json::Value {
-        let st = score(true)
-            .args(["--scan", "50"])
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(
-            st.status.success(),
-            "{}",
-            String::from_utf8_lossy(&st.stderr)
-        );
-        serde_json::from_slice(&st.stdout).unwrap()
+        run_json(score(true).args(["--scan", "50"]).args(extra))
     };
     let detected = run(&[]);
     let given = run(&["--max-range", "10"]);
