@@ -143,14 +143,7 @@ fn race(c: &mut Criterion) {
             beam.caster().with_min_jump_cells(min_jump),
         );
         g.bench_function(format!("raycast_only_min_jump_{min_jump}"), |b| {
-            b.iter(|| {
-                let mut acc = 0.0f32;
-                for (_, _, pose) in scans {
-                    tuned.cast_layout(layout, black_box(pose), Stride::ONE, &mut z_star);
-                    acc += z_star.iter().sum::<f32>();
-                }
-                acc
-            })
+            b.iter(|| race_passes::casts(&tuned, &data))
         });
     }
     g.finish();
