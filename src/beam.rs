@@ -310,7 +310,7 @@ mod tests {
         BeamModel::new(BeamIntrinsics::new(0.25, 0.25, 0.25, 0.25, 1.0, 0.5, 10.0).unwrap())
     }
 
-    /// The chapter's worked example, component by component (models.md §1).
+    /// The chapter's worked example, component by component (docs/models.md#mixture).
     #[test]
     fn worked_example_components() {
         let m = toy();

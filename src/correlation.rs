@@ -1,4 +1,4 @@
-//! Map correlation, Thrun §6.5 (models.md §4): rasterize the scan into a small local map around
+//! Map correlation, Thrun §6.5 (docs/models.md#features): rasterize the scan into a local map around
 //! the pose, read the same window of the global map, and score the pose by the correlation
 //! coefficient of the two, clipped at zero.
 //!

@@ -1,5 +1,5 @@
 //! The overconfidence diagnostic: lag-1 autocorrelation of per-beam residuals in bearing order
-//! (models.md §5).
+//! (docs/models.md#tempering).
 //!
 //! With a correct map the residuals of neighbouring beams are nearly independent and the lag-1
 //! correlation is near 0; a map that is wrong (shifted, scaled, a wall moved) biases whole runs of

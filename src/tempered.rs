@@ -1,5 +1,5 @@
 //! Honest confidence: tempering a scan log-likelihood, and normalizing particle weights without
-//! underflow (models.md §5; Thrun §6.3.4's p^{1/κ}).
+//! underflow (docs/models.md#tempering; Thrun §6.3.4's p^{1/κ}).
 //!
 //! The product over K beams treats correlated beams as independent and overstates every
 //! log-odds by about `K/K_eff`. [`Tempered`] divides the log-likelihood by `κ ≥ 1` — one scalar,

@@ -6,7 +6,7 @@
 
 use beamfield::{Pose, PreparedScan};
 
-/// Tempering κ: `ln q = (1/κ)·Σ ln p` (models.md §5), as calibrated on this log and map by
+/// Tempering κ: `ln q = (1/κ)·Σ ln p` (docs/models.md#tempering) as calibrated on this log and map by
 /// `beamfield calibrate` (coverage of the 95 % credible sets: 0.25 at κ = 1, 0.95 at κ = 8.25,
 /// with σ_hit 5 cm; close to, not exactly, this demo's fitted σ_hit).
 pub const KAPPA: f32 = 8.25;
@@ -17,9 +17,9 @@ pub const SIGMA_HIT_M: f32 = 0.0588;
 pub const Z_HIT: f32 = 0.95;
 /// See [`Z_HIT`].
 pub const Z_RAND: f32 = 0.05;
-/// Acceptance (issue 7): position error, metres.
+/// Acceptance of the demo: position error, metres.
 pub const ACCEPT_M: f32 = 0.05;
-/// Acceptance (issue 7): heading error, degrees.
+/// Acceptance of the demo: heading error, degrees.
 pub const ACCEPT_DEG: f32 = 1.0;
 
 /// A grid of poses around a centre: `xy_steps` offsets per axis in x and y, `th_steps` in

@@ -1,4 +1,4 @@
-//! Issue 3's acceptance measured over the whole Intel log against one map built from the whole
+//! The localization acceptance over the whole Intel log against one map built from the whole
 //! log (the demo's blob): for every scan, the best pose of a ±20 cm, ±5° grid (1 cm, 0.25°)
 //! around its logged pose, and whether it lies within 5 cm and 1° of it.
 //!

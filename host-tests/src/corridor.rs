@@ -1,4 +1,4 @@
-//! The chapter's overconfidence experiment world (models.md §5): a straight corridor with door
+//! The chapter's overconfidence world (docs/models.md#tempering): a straight corridor with door
 //! frames, an exact ray caster against its wall segments, and rasterization into an occupancy
 //! grid (row 0 = lowest y), for building distance fields from a right and a wrong map.
 

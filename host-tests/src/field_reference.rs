@@ -1,4 +1,4 @@
-//! f64 / brute-force references for the distance field and the likelihood field (models.md §3).
+//! f64 / brute-force references of the distance field and likelihood field (docs/models.md#field).
 //!
 //! Written from the definitions, sharing no code with the crate: the distance of a cell is the
 //! minimum over every occupied cell of the Euclidean distance between cell indices (no

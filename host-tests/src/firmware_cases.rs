@@ -113,7 +113,7 @@ fn simplex(rng: &mut Lcg) -> [f32; 4] {
 /// The whole table, in a fixed order.
 pub fn cases() -> Vec<Case> {
     let mut out = Vec::new();
-    // The chapter's worked example (models.md §1): all weights 0.25, σ = 1, λ = 0.5, z_max = 10.
+    // The chapter's example (docs/models.md#mixture): all weights 0.25, σ = 1, λ = 0.5, z_max = 10.
     let toy = [0.25, 0.25, 0.25, 0.25, 1.0, 0.5, 10.0];
     for z in [4.5f32, 5.0, 3.0, 7.0, 10.0] {
         out.push(case("worked example", toy, z, 5.0));

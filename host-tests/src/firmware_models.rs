@@ -9,7 +9,7 @@
 //! (`cargo xtask modelcases` rewrites it).
 
 use crate::field_reference::{self, Grid};
-use crate::issue9_cases::{correlation_case, SAMPLER_INPUT, SAMPLER_WORDS};
+use crate::landmark_correlation_cases::{correlation_case, SAMPLER_INPUT, SAMPLER_WORDS};
 use beamfield::landmark::sample_pose;
 use beamfield::landmark::{log_likelihood, Feature, FeatureNoise, Landmark};
 use beamfield::sonar::{CrosstalkModel, Ring, Schedule, SonarModel};
@@ -241,7 +241,7 @@ pub fn sonar_score() -> f32 {
         .log_likelihood
 }
 
-/// The correlation case of `issue9_cases` as a blob: `#` cells are occupied (code 0), others
+/// `landmark_correlation_cases`' correlation case as a blob: `#` cells are occupied (code 0), others
 /// code 40.
 pub fn correlation_blob() -> Vec<u8> {
     let c = correlation_case();

@@ -1,13 +1,13 @@
 //! Host-side reference and helpers for testing `beamfield`.
 //!
-//! [`reference`] is an f64 implementation written straight from `shared/design/models.md`,
+//! [`reference`] is an f64 implementation written from the textbook (`docs/models.md`),
 //! independent of the crate's f32 code: it shares no function with it (std's f64 math, not the
 //! crate's math façade), so an error in one is not silently copied into the other.
 
 pub mod field_reference;
 pub mod firmware_cases;
 pub mod firmware_models;
-pub mod issue9_cases;
+pub mod landmark_correlation_cases;
 pub mod reference;
 pub mod sonar_sim;
 pub mod sonar_uci;

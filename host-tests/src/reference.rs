@@ -1,4 +1,5 @@
-//! An f64 reference of the beam mixture and the textbook EM step, written from models.md §1–2.
+//! An f64 reference of the beam mixture and the textbook EM step, written from Thrun Tables 6.1–6.2
+//! (docs/models.md).
 //!
 //! Deliberately independent of the crate: its own erfc (a Taylor series near 0, a continued
 //! fraction in the tails, both accurate to ~1e-14), std's f64 `exp`/`ln`, no shared code.
@@ -92,7 +93,7 @@ pub fn phi(u: f64) -> f64 {
     0.5 * erfc(-u / std::f64::consts::SQRT_2)
 }
 
-/// Classification of a reading, as models.md and the crate's policy define it.
+/// Classification of a reading, as docs/models.md#mixture and the crate's policy define it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Kind {
     /// NaN or negative.
@@ -206,7 +207,7 @@ pub fn scan_log_likelihood(p: &Intrinsics, z: &[f64], z_star: &[f64]) -> f64 {
         .sum()
 }
 
-/// One textbook EM step (Table 6.2, models.md §2). Returns the new parameters and the mean
+/// One textbook EM step (Table 6.2, docs/models.md#em). Returns the new parameters and the mean
 /// log-likelihood per reading *before* the step.
 pub fn em_step_textbook(p: &Intrinsics, z: &[f64], z_star: &[f64]) -> (Intrinsics, f64) {
     let w = p.weights();

@@ -364,7 +364,7 @@ pub fn spread_groups(n: usize, k: usize) -> Vec<Vec<usize>> {
         .collect()
 }
 
-/// Reference `c_i` (models.md §6) from the definitions, in f64, independent of the crate: group g fires at g·Δ; j's last pulse before i's is
+/// Reference `c_i` (docs/models.md#sonar) from the definitions, in f64, independent of the crate: group g fires at g·Δ; j's last pulse before i's is
 /// ((g_i − g_j) mod T)·Δ earlier; weight = clamp(1 − age/L, 0, 1); same group = 1.
 pub fn reference_c(
     bearings: &[f64],

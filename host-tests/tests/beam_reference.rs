@@ -1,4 +1,4 @@
-//! The crate's f32 beam mixture against the independent f64 reference (models.md §1).
+//! The crate's f32 beam mixture against the independent f64 reference (docs/models.md#mixture).
 //!
 //! # Tolerance table (derived, not tuned)
 //! Inputs are drawn as f32 and handed to both sides exactly, so input rounding is no error
@@ -49,7 +49,7 @@ fn beam_tol(reference: f64) -> f64 {
     2e-6 + 1e-6 * reference.abs()
 }
 
-/// models.md §1: the components and mixture of z = 4.5, and one textbook EM step, to 1e-6.
+/// Thrun Table 6.1: the components and mixture of z = 4.5, and one textbook EM step, to 1e-6.
 #[test]
 fn worked_example_to_1e6() {
     let p = toy();
@@ -69,8 +69,8 @@ fn worked_example_to_1e6() {
     assert!((f64::from(c.rand) - 0.1).abs() < 1e-7);
     assert!((f64::from(m.beam_likelihood(4.5, 5.0)) - 0.127_369).abs() < 1e-6);
 
-    // The f64 reference's textbook EM step reproduces models.md's numbers, including the
-    // corrected λ = 0.283739 (the chapter's printed 0.283737 is a misprint, models.md §1).
+    // The f64 reference's textbook EM step reproduces docs/models.md#mixture, including the
+    // corrected λ = 0.283739 (the chapter's 0.283737 is a misprint, docs/models.md#mixture).
     let z = [4.5, 5.0, 3.0, 7.0, 10.0];
     let zs = [5.0; 5];
     let (next, ll_before) = r::em_step_textbook(&p, &z, &zs);

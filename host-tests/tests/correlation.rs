@@ -13,7 +13,7 @@ use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCU
 
 use host_tests::xorshift::XorShift64 as Rng;
 
-/// ρ by its definition (models.md §4), in f64, with m̄ the mean over both maps.
+/// ρ by its definition (docs/models.md#features), in f64, with m̄ the mean over both maps.
 fn rho_f64(m: &[f64], l: &[f64]) -> f64 {
     let n = m.len() as f64;
     let mean = (m.iter().sum::<f64>() + l.iter().sum::<f64>()) / (2.0 * n);
@@ -352,17 +352,17 @@ fn intel_peak_at_truth_and_with_a_wall_removed() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The on-target reference cases (host_tests::issue9_cases), checked on the host.
+// The on-target reference cases (host_tests::landmark_correlation_cases), checked on the host.
 
 // The word-replaying generator shared with the on-target cases (an exhausted stream reads 0;
 // the test checks below that every word was used and no more).
 use host_tests::firmware_models::Replay;
 
 #[test]
-fn issue9_reference_cases_hold_on_host() {
+fn landmark_correlation_cases_hold_on_host() {
     use beamfield::landmark::{log_likelihood, sample_pose};
     use beamfield::{Feature, FeatureNoise, Landmark};
-    use host_tests::issue9_cases::*;
+    use host_tests::landmark_correlation_cases::*;
     let build = |i: &LandmarkInput| {
         (
             Feature::new(i.0[0], i.0[1], i.0[2]).unwrap(),

@@ -18,7 +18,7 @@ fn to_ref(i: &BeamIntrinsics) -> Intrinsics {
     }
 }
 
-/// Draws one reading from the mixture `p` given `z_star` (the generative model of models.md §1).
+/// Draws one reading from the mixture `p` given `z_star` (generative model, docs/models.md#mixture).
 fn sample_reading(rng: &mut Rng, p: &Intrinsics, z_star: f64) -> f64 {
     let u = rng.uniform();
     let zmax = p.max_range;
@@ -75,7 +75,7 @@ fn one_step(shape: ShapeUpdate, start: BeamIntrinsics, z: &[f32], zs: &[f32]) ->
         .intrinsics
 }
 
-/// models.md §1: the chapter's worked example, one textbook step, to 1e-6 (with the corrected
+/// Thrun Table 6.1: the chapter's worked example, one textbook step, to 1e-6 (with the corrected
 /// λ = 0.283739, not the printed 0.283737).
 #[test]
 fn worked_example_one_textbook_step() {
@@ -243,7 +243,7 @@ fn worked_example_truncated_lambda_goes_to_its_bound() {
     assert!(t.windows(2).all(|w| w[1] >= w[0] - 1e-12), "{t:?}");
 }
 
-/// models.md §2: 40,000 short readings of λ = 1 truncated at z* = 2 m.
+/// docs/models.md#em: 40,000 short readings of λ = 1 truncated at z* = 2 m.
 #[test]
 fn lambda_from_truncated_short_readings() {
     let mut rng = Rng(0x5EED_0001);
@@ -352,7 +352,7 @@ fn recovers_known_intrinsics() {
     );
 }
 
-/// A textbook step that lowers the data log-likelihood exists (models.md §2); the truncated EM on
+/// A textbook step that lowers the log-likelihood exists (docs/models.md#em); the truncated EM on
 /// the same data set does not lower it.
 #[test]
 fn textbook_step_can_decrease_the_log_likelihood() {

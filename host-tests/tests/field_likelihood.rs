@@ -25,7 +25,7 @@ fn turtlebot3() -> (Vec<u8>, Grid) {
 
 use host_tests::xorshift::XorShift64 as Rng;
 
-/// f64 endpoint of beam k (grid units), as models.md §3 writes it.
+/// f64 endpoint of beam k (grid units), as docs/models.md#field writes it.
 fn endpoint(
     grid: &Grid,
     pose: (f64, f64, f64),

@@ -53,7 +53,7 @@ fn intel() -> CarmenLog {
     .unwrap()
 }
 
-/// The table index the view's semantics give at an f64 grid point (models.md §3): the cell's
+/// The table index the view's semantics give at an f64 point (docs/models.md#field): the cell's
 /// code on the map; off it, the nearest cell's code plus the distance to the map in code
 /// steps, rounded, clamped at 255.
 fn code64(view: &FieldView<'_>, gx: f64, gy: f64) -> u8 {

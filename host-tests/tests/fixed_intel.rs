@@ -1,4 +1,4 @@
-//! Issue 8's acceptance on real data: the fixed-point likelihood field against the f32 path on
+//! Fixed-point acceptance on real data: the fixed-point likelihood field against the f32 path on
 //! the Intel lab map the firmware links (`firmware/assets/intel.bin`, 5 cm cells, d_max 2 m) and
 //! real scans of the Intel log, over the demo's pose grid (±20 cm at 2.5 cm, ±5° at 0.5°:
 //! 6,069 poses per scan) around each scan's logged pose.

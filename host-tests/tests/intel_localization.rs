@@ -1,4 +1,4 @@
-//! Issue 3's acceptance test: on the Intel lab log, with a map built from the log's own
+//! The localization acceptance test: on the Intel lab log, with a map built from the log's own
 //! (corrected) poses, the best pose of a ±20 cm, ±5° grid around the logged pose lies within
 //! 5 cm and 1° of it, for scans spread over the whole log.
 //!

@@ -1,5 +1,5 @@
 //! The landmark model (Thrun Table 6.4) and the two-feature proposal against independent f64
-//! computations: the wrap cases, an f64 log-likelihood written from models.md §4, and exact
+//! computations: the wrap cases, an f64 log-likelihood from docs/models.md#features, and exact
 //! recovery of known poses from two noiseless features.
 //!
 //! Tolerances are first-order f32 error models stated next to each check (ε = 2⁻²³), with a
@@ -28,7 +28,7 @@ fn wrap64(x: f64) -> f64 {
     (x + PI).rem_euclid(TAU) - PI
 }
 
-/// The f64 reference of Table 6.4 (models.md §4), from the f32 inputs widened exactly.
+/// The f64 reference of Table 6.4 (docs/models.md#features), from the f32 inputs widened exactly.
 /// Returns the log-likelihood and the three residuals.
 fn reference_ll(f: [f32; 3], l: [f32; 3], p: [f32; 3], s: [f32; 3]) -> (f64, [f64; 3]) {
     let [r, phi, sig] = f.map(f64::from);

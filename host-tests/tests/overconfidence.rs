@@ -1,4 +1,4 @@
-//! The chapter's overconfidence experiment (models.md §5, issue 5 item 4), and the likelihood
+//! The chapter's overconfidence experiment (docs/models.md#tempering), and the likelihood
 //! field as a [`SensorModel`] (stride, tempering).
 //!
 //! Setup (chosen here, documented in `docs/overconfidence.md`):

@@ -1,4 +1,4 @@
-//! Smoothness of the race (issue 4, item 4): the largest change of the log-likelihood between
+//! Smoothness of the race (docs/race.md): the largest change of the log-likelihood between
 //! neighbouring poses, beam model with ray casting (`BeamFieldModel`) against the likelihood
 //! field, on the Intel lab map (the demo firmware's blob) with real scans at their logged poses.
 //!

@@ -1,6 +1,6 @@
 //! Property tests: for every valid schedule, every beam's weights stay on the simplex, a beam
 //! fired alone keeps the base weights exactly, and `c_i` matches an f64 brute force written from
-//! the definitions in models.md §6 (firing times, echo lifetime, product over neighbours).
+//! the definitions in docs/models.md#sonar (firing times, echo lifetime, product over neighbours).
 
 use beamfield::sonar::{CrosstalkModel, Ring, Schedule, SonarModel};
 use beamfield::BeamIntrinsics;

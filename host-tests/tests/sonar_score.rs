@@ -1,6 +1,6 @@
 //! Scoring a sonar scan with crosstalk-aware per-beam weights against the f64 reference of the
-//! beam mixture (`host_tests::reference`) with per-beam weights computed in f64 from models.md
-//! §6. The same inputs are the ones an on-target (QEMU) check should reproduce.
+//! beam mixture (`host_tests::reference`) with per-beam weights computed in f64 from
+//! docs/models.md#sonar. The same inputs are the ones an on-target (QEMU) check should reproduce.
 
 use beamfield::sonar::{CrosstalkModel, Ring, Schedule, SonarModel};
 use beamfield::{BeamIntrinsics, Scan};

@@ -92,7 +92,7 @@ fn run(q_true: QTrue, poses_per_k: usize, seed: u64) -> Run {
 }
 
 /// `c_k` as the EM sees it: the part of `z_rand(k)` above the lone transducer's, rescaled
-/// (models.md §6: `z_rand(k) = z_rand,0 + (1 − z_rand,0)·c_k`).
+/// (docs/models.md#sonar: `z_rand(k) = z_rand,0 + (1 − z_rand,0)·c_k`).
 fn learnt_c(per_k: &[(usize, f32, u64, f64, f64, f64)]) -> Vec<f64> {
     let z0 = f64::from(per_k[0].1);
     per_k

@@ -116,10 +116,12 @@ fn landmark_cases_match_the_f64_formula() {
     }
 }
 
-/// The correlation and sampler cases against issue 9's f64 values.
+/// The correlation and sampler cases against the f64 values of `landmark_correlation_cases`.
 #[test]
 fn correlation_and_sampler_match_the_f64_values() {
-    use host_tests::issue9_cases::{correlation_case, sampler_poses, POSE_TOL, RHO_TOL};
+    use host_tests::landmark_correlation_cases::{
+        correlation_case, sampler_poses, POSE_TOL, RHO_TOL,
+    };
     let e = expected();
     let want = correlation_case().expected_rho;
     assert!(

@@ -1,5 +1,5 @@
 //! EM for the beam model's intrinsics: Thrun's `learn_intrinsic_parameters`, Table 6.2, with a
-//! monotone M-step that accounts for the truncation normalizers (models.md §2).
+//! monotone M-step that accounts for the truncation normalizers (docs/models.md#em).
 //!
 //! # What it does
 //! Given readings `z_i` with their ray-cast ranges `z*_i` (metres), it iterates
@@ -85,7 +85,7 @@
 //!
 //! # Grouped fits
 //! [`fit_grouped`] fits one set of weights per group (for example per co-fired count of an
-//! ultrasonic ring, models.md §6) with σ and λ shared by all groups: the source yields
+//! ultrasonic ring, docs/models.md#sonar) with σ and λ shared by all groups: the source yields
 //! `(group, range_m, z_star_m)`. [`fit`] is the one-group case.
 //!
 //! # Example

@@ -1,5 +1,5 @@
 //! The distance-field blob, format version 1: one definition for the host writer and the device
-//! parser (models.md §7). The full specification, for third-party builders, is
+//! parser (docs/models.md#blob). The full specification, for third-party builders, is
 //! `docs/blob-format.md`; this module is its reference implementation.
 //!
 //! ```text

@@ -1,4 +1,4 @@
-//! The exact squared Euclidean distance transform of an occupancy grid (models.md §3).
+//! The exact squared Euclidean distance transform of an occupancy grid (docs/models.md#field).
 //!
 //! Felzenszwalb & Huttenlocher, *Distance Transforms of Sampled Functions* (Theory of Computing
 //! 8, 2012): the squared transform is separable, so a 1-D transform runs down every column and

@@ -1,5 +1,5 @@
 //! The likelihood field model: Thrun's `likelihood_field_range_finder_model`, Table 6.3
-//! (models.md §3), scored over a [`FieldView`] in flash.
+//! (docs/models.md#field), scored over a [`FieldView`] in flash.
 //!
 //! Each reading `z_k < z_max` is projected to the point it claims to have hit,
 //!

@@ -1,5 +1,5 @@
 //! The distance field: from an occupancy grid to a flash blob to the likelihood field
-//! (models.md §3 and §7, Thrun Table 6.3).
+//! (Thrun Table 6.3; docs/models.md#field, docs/blob-format.md).
 //!
 //! - [`edt`]: the exact squared Euclidean distance transform (Felzenszwalb–Huttenlocher), on
 //!   caller-provided buffers.

@@ -17,7 +17,7 @@
 //! byte read, one table read and one `f32` add. `cargo xtask insns` counts it on the target.
 //! On the host, `cargo bench -p host-tests --bench field` times it.
 //! Endpoints off the map take the same out-of-line path as [`LikelihoodField::score`] (the
-//! distance to the map's edge is charged, models.md §3).
+//! distance to the map's edge is charged, docs/models.md#field).
 //!
 //! # Numbers
 //! With `F` fractional bits in grid coordinates ([`PreparedScan::frac_bits`], 16 for maps and

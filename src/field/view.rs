@@ -11,7 +11,7 @@ use super::blob::{parse_blob, BlobError, FieldHeader, CODE_MAX};
 /// Map frame, metres. Cell `(ix, iy)` covers `[origin_x + ix·s, origin_x + (ix+1)·s) ×
 /// [origin_y + iy·s, origin_y + (iy+1)·s)` with `s` the cell size; `iy = 0` is the lowest row.
 /// A point off the map reads the cell nearest to it plus the Euclidean distance from the point
-/// to the map's rectangle (models.md §3), so an endpoint off the map looks unlikely rather than
+/// to the map's rectangle (docs/models.md#field), so an off-map endpoint looks unlikely rather than
 /// uninformative.
 #[derive(Clone, Copy, Debug)]
 pub struct FieldView<'a> {

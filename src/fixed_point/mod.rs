@@ -1,4 +1,4 @@
-//! The likelihood field (Thrun Table 6.3, models.md §3) in fixed point, for MCUs without an
+//! The likelihood field (Thrun Table 6.3, docs/models.md#field) in fixed point, for MCUs without an
 //! FPU (Cortex-M0/M0+, Cortex-M3, rv32imc). Behind the `fixed` feature.
 //!
 //! The scorer reads the same [`FieldView`](crate::field::FieldView) blob as the f32

@@ -253,7 +253,7 @@ pub struct FixedScore {
 }
 
 impl FixedScore {
-    /// The tempered log-likelihood `κ · Σ terms` (models.md, tempering), one fixed-point
+    /// The tempered log-likelihood `κ · Σ terms` (docs/models.md#tempering), one fixed-point
     /// multiply. `κ` must be in `(0, 1]`; values outside are clamped there.
     pub fn tempered(&self, kappa: I16F16) -> I48F16 {
         let k = i64::from(kappa.to_bits()).clamp(1, 1 << 16);

@@ -1,5 +1,5 @@
-//! Crosstalk-aware per-beam mixture weights and sonar-scan scoring (models.md §6 on top of the
-//! beam mixture of Thrun Table 6.1, models.md §1).
+//! Crosstalk-aware per-beam mixture weights and sonar scan scores (docs/models.md#sonar on the
+//! beam mixture of Thrun Table 6.1, docs/models.md#mixture).
 //!
 //! # Pairwise crosstalk probability `q(Δβ)`
 //! The probability that one co-fired transducer `j` corrupts transducer `i`'s reading (its echo

@@ -1,4 +1,4 @@
-//! Learning the crosstalk model from logs (models.md §6, "Learning").
+//! Learning the crosstalk model from logs (docs/models.md#sonar, "Learning").
 //!
 //! 1. [`GroupedWeightEm`]: EM for the four mixture weights of Thrun Table 6.1, run separately for
 //!    each co-fired count `k` (0 = fired alone), **with σ_hit and λ_short held fixed**: the
@@ -6,7 +6,7 @@
 //!    reading, the M-step sets each group's weights to its mean responsibilities. Only sufficient
 //!    statistics are kept (four sums and a count per group); the caller streams its readings
 //!    once per pass. This is a small internal EM written for the weights only; the full
-//!    six-parameter EM of Table 6.2 (models.md §2) can replace it later — it must then be run
+//!    six-parameter EM of Table 6.2 (docs/models.md#em) can replace it later — it must then be run
 //!    with σ and λ shared across the groups, or the groups' `z_rand` stop being comparable.
 //! 2. [`fit_constant_q`]: `z_rand(k) = z_rand,0 + (1 − z_rand,0)·(1 − (1 − q)^k)` is
 //!    `ln(1 − z_rand(k)) = ln(1 − z_rand,0) + k·ln(1 − q)`, a straight line in `k`. It is fitted

@@ -1,4 +1,4 @@
-//! Ultrasonic ring with crosstalk-aware `z_rand` (models.md §6, on the beam mixture of Thrun
+//! Ultrasonic ring, crosstalk-aware `z_rand` (docs/models.md#sonar, on the beam mixture of Thrun
 //! Table 6.1).
 //!
 //! - [`ring`]: transducer geometry ([`Ring`]);

@@ -1,4 +1,4 @@
-//! Ring geometry: `M ≤ capacity` ultrasonic transducers around a robot (models.md §6).
+//! Ring geometry: `M ≤ capacity` ultrasonic transducers around a robot (docs/models.md#sonar).
 //!
 //! Each transducer has a bearing (radians, counter-clockwise from the robot's heading), a mounting
 //! offset (metres in the robot frame: x forward, y left) and the ring shares one cone half-angle

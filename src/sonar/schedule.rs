@@ -1,4 +1,4 @@
-//! Firing schedule of an ultrasonic ring (models.md §6).
+//! Firing schedule of an ultrasonic ring (docs/models.md#sonar).
 //!
 //! A schedule is an ordered list of groups `G_0 … G_{T−1}` of transducer indices. The groups are
 //! fired one after the other, `interval_s` apart, and the cycle repeats: group `g` fires at

@@ -1,4 +1,4 @@
-//! κ calibration (models.md §5): the smallest tempering exponent whose credible sets contain
+//! κ calibration (docs/models.md#tempering): smallest tempering exponent whose credible sets contain
 //! the true pose at the requested rate.
 //!
 //! For each scan with a known pose, the caller scores a local grid of poses around it (the true

@@ -1,5 +1,5 @@
 //! `beamfield score` and `beamfield calibrate`: the likelihood field on the scans of a CARMEN
-//! log, at one pose, over a local pose grid, and κ calibration (models.md §5).
+//! log, at one pose, over a local pose grid, and κ calibration (docs/models.md#tempering).
 //!
 //! The FLASER pose is the laser's pose, so scans are scored with a centred mount and poses are
 //! laser poses (metres, radians in the map frame).

@@ -1,4 +1,4 @@
-//! `beamfield sonar …`: host tools for an ultrasonic ring (models.md §6).
+//! `beamfield sonar …`: host tools for an ultrasonic ring (docs/models.md#sonar).
 //!
 //! `beamfield sonar schedule --ring RING.toml --rate HZ` compares candidate firing schedules by
 //! expected crosstalk and achievable scan rate, and recommends one. See `docs/sonar.md`.
@@ -413,7 +413,7 @@ pub fn render_text(r: &ScheduleReport) -> String {
     }
     let _ = writeln!(
         s,
-        "\nc is the probability that a reading is a neighbour's echo (models.md §6): \
+        "\nc is the probability that a reading is a neighbour's echo (docs/models.md#sonar): \
          1 − Π(1 − w·q(Δβ)) over co-fired and still-lingering transducers."
     );
     match r.recommended {

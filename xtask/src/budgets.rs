@@ -1,5 +1,5 @@
 //! `cargo xtask budgets` (flash, RAM, stack and instruction budgets of the scoring core, as a
-//! table against issue 7's targets) and `cargo xtask nopanic` (the link-time proof that the
+//! table against the demo's targets) and `cargo xtask nopanic` (the link-time proof that the
 //! scoring core has no panic path, and `--show-failure`, which shows that proof failing on a
 //! deliberate panic).
 
@@ -12,11 +12,11 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-/// Issue 7: text of the scoring core, bytes.
+/// Target: text of the scoring core, bytes.
 const TARGET_TEXT: u64 = 8 * 1024;
-/// Issue 7: RAM of the scoring core with its stack, bytes (360 beams).
+/// Target: RAM of the scoring core with its stack, bytes (360 beams).
 const TARGET_RAM: u64 = 2 * 1024;
-/// Issue 7: instructions per beam of the likelihood field.
+/// Target: instructions per beam of the likelihood field.
 const TARGET_LF_PER_BEAM: f64 = 20.0;
 /// The real MCU layout the image must fit (a hard requirement).
 const LAYOUT: &str = "memory-stm32f405.x";

@@ -36,7 +36,7 @@ const INSNS_REGIONS: [(&str, &str); 10] = [
     ("LF prepared score", "beam"),
     ("LF prepared, no beams (per pose)", "pose"),
     ("LF per-pose path (score)", "beam"),
-    // Issue 4's race: real scans, real map, z* cast on the device.
+    // The race (docs/race.md): real scans, real map, z* cast on the device.
     ("beam model + ray cast, Intel", "beam"),
 ];
 
@@ -98,7 +98,7 @@ enum Task {
         #[arg(long, value_enum, default_value = "mps2-an386")]
         board: demo::Board,
     },
-    /// Budgets of the scoring core against issue 7's targets, as a table: .text/.rodata/.bss
+    /// Budgets of the scoring core against the demo's targets, as a table: .text/.rodata/.bss
     /// (size_core minus size_skeleton), stack high-water marks (painted stack), instructions
     /// per pose and per beam (QEMU counting plugin), no heap, fits the STM32F405 layout.
     ///
@@ -284,7 +284,7 @@ fn build_firmware(release: bool, features: Option<&str>) -> Result<BTreeMap<Stri
     Ok(elves)
 }
 
-/// A scratch directory for QEMU's output files (never a pipe: see target.md).
+/// A scratch directory for QEMU's output files (never a pipe: docs/firmware.md).
 fn scratch() -> Result<PathBuf> {
     let dir = std::env::temp_dir().join(format!("beamfield-xtask-{}", std::process::id()));
     fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -12,7 +12,7 @@ use beamfield_firmware::{exit, println, Fixed};
 use cortex_m_rt::entry;
 use panic_semihosting as _;
 
-/// The worked example of models.md §1 (values checked by hand, pinned by the chapter's unit
+/// The worked example of docs/models.md#mixture (numbers checked by hand, pinned by the chapter's unit
 /// test), with its allowed error: the printed values are rounded to 6 decimals (±5e-7) and the
 /// f32 evaluation adds well under 5e-7.
 const WORKED_TOL: f64 = 1e-6;
@@ -33,7 +33,7 @@ fn check_value(label: &str, got: f64, want: f64, tol: f64) -> bool {
 }
 
 fn worked_example() -> bool {
-    println!("worked example (models.md §1): Z=[4.5,5,3,7,10], z*=5, z_max=10, weights 0.25, sigma=1, lambda=0.5");
+    println!("worked example (Thrun Table 6.1): Z=[4.5,5,3,7,10], z*=5, z_max=10, weights 0.25, sigma=1, lambda=0.5");
     let Ok(intr) = BeamIntrinsics::new(0.25, 0.25, 0.25, 0.25, 1.0, 0.5, 10.0) else {
         println!("FAIL worked-example intrinsics rejected");
         return false;

@@ -14,7 +14,7 @@
 //! weights are stored) and reports that best pose as well.
 //!
 //! It reports, per scan and overall, whether the fine grid's best pose is within 5 cm and 1° of
-//! the logged one (issue 7's acceptance). That is a statement about the log as much as about the
+//! the logged one (the demo's acceptance). That is a statement about the log as much as about the
 //! model: the log's corrected poses disagree with a map built from all of them by up to ~10 cm
 //! for some scans (see docs/demo.md), so the count is reported, not enforced. The exit status is
 //! 1 when the device could not do its job (a scan rejected, weights not normalizable), else 0.
@@ -67,7 +67,7 @@ static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
 /// The SysTick (core) clock, Hz: 25 MHz on mps2-an386 (the default); `cargo xtask demo --board
 /// netduinoplus2` sets `BEAMFIELD_CORE_HZ` to QEMU's STM32F405 clock. Under `-icount shift=0`
 /// one instruction is one nanosecond, so a tick is `1e9 / CORE_HZ` instructions (40 on
-/// mps2-an386, target.md).
+/// mps2-an386, docs/firmware.md).
 const CORE_HZ: u64 = match option_env!("BEAMFIELD_CORE_HZ") {
     Some(s) => parse_u64(s),
     None => 25_000_000,

@@ -17,7 +17,7 @@
 //! 7. `PreparedScan::score` of a scan with no kept beam (all max-range) at the same poses:
 //!    the per-pose work alone, so `(6 − 7) / beams` is the per-beam cost;
 //! 8. `LikelihoodField::score` (the per-pose path) at the same poses, per kept beam;
-//! 9. `BeamFieldModel` (issue 4's race): the beam model *with* ray casting through the same
+//! 9. `BeamFieldModel` (the race, docs/race.md): the beam model *with* ray casting through the same
 //!    blob, scoring the 8 real scans (1,440 beams) at their logged poses, with the intrinsics EM
 //!    fitted on that log (constants in the module [`intel`]).
 //!
@@ -322,7 +322,7 @@ fn main() -> ! {
         score.scored,
         score.invalid
     );
-    // Region 9 (issue 4's race): the beam model with ray casting on the real Intel map.
+    // Region 9 (the race, docs/race.md): the beam model with ray casting on the real Intel map.
     let Some((race_ll, race_scored)) = beam_model_with_ray_casting() else {
         println!("insns: region 9: Intel blob, intrinsics or scans rejected");
         exit(false)
