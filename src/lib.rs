@@ -6,6 +6,7 @@ pub mod beam_field;
 pub mod correlation;
 pub mod diagnostic;
 pub mod em;
+mod error;
 pub mod field;
 #[cfg(feature = "fixed")]
 pub mod fixed_point;
@@ -31,6 +32,7 @@ pub use correlation::{
     Correlation, CorrelationError, MapCorrelation, CORRELATION_EPSILON, MAX_WINDOW_CELLS,
 };
 pub use diagnostic::Lag1;
+pub use error::Error;
 pub use field::{
     edt_scratch_len, emit_blob, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError,
     EdtScratch, FieldHeader, FieldView, LikelihoodError, LikelihoodField, LikelihoodParam,

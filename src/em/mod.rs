@@ -365,7 +365,7 @@ where
 /// slice are ignored).
 ///
 /// # Errors
-/// As [`fit`].
+/// An [`EmError`], as [`fit`].
 pub fn fit_slices(
     config: &EmConfig,
     start: BeamIntrinsics,

@@ -193,7 +193,7 @@ impl FieldHeader {
     /// Total blob length in bytes (header plus one byte per cell).
     ///
     /// # Errors
-    /// As [`FieldHeader::validate`].
+    /// A [`BlobError`], as [`FieldHeader::validate`].
     pub fn required_len(&self) -> Result<usize, BlobError> {
         let cells = self.validate()?;
         cells
@@ -274,7 +274,7 @@ pub fn emit_blob(header: &FieldHeader, codes: &[u8], out: &mut [u8]) -> Result<u
 /// [`squared_edt`](super::squared_edt)), encoding each with [`FieldHeader::encode_squared_cells`].
 ///
 /// # Errors
-/// As [`emit_blob`].
+/// A [`BlobError`], as [`emit_blob`].
 pub fn emit_blob_from_squared_cells(
     header: &FieldHeader,
     squared_cells: &[u32],

@@ -148,7 +148,7 @@ pub fn two_feature_poses(
 /// `f1`, then one for `f2`.
 ///
 /// # Errors
-/// As [`two_feature_poses`]: with noise, circles that nearly touch can miss each other; draw
+/// An [`IntersectionError`], as [`two_feature_poses`]: with noise, circles that nearly touch can miss each other; draw
 /// again or widen the search.
 pub fn sample_two_feature_poses<R: Rng + ?Sized>(
     f1: &Feature,
