@@ -3,6 +3,7 @@
 
 pub mod beam;
 pub mod beam_field;
+mod build_info;
 pub mod correlation;
 pub mod diagnostic;
 pub mod em;
@@ -28,6 +29,7 @@ mod trig;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use beam_field::BeamFieldModel;
+pub use build_info::{BuildInfo, BUILD_INFO};
 pub use correlation::{
     Correlation, CorrelationError, MapCorrelation, CORRELATION_EPSILON, MAX_WINDOW_CELLS,
 };

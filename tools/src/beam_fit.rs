@@ -295,11 +295,9 @@ pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
     )
     .map_err(FitError::Log)?;
     let read_s = t_read.elapsed().as_secs_f64();
+    let progress = crate::progress::Progress::new("casting z*: scan");
     let r = fit_log(view, &log, args, |done, total| {
-        eprint!("\rcasting z*: scan {done}/{total}");
-        if done == total {
-            eprintln!();
-        }
+        progress.update(done, total, "")
     })?;
     let intr = r.fit.intrinsics;
     let decrease = r.largest_decrease();
@@ -317,10 +315,10 @@ pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
             "trace_dropped": r.fit.trace_dropped,
             "trace_largest_decrease": decrease,
             "scans": r.scans,
-            "pairs": r.pairs,
-            "used": r.fit.counts.used,
-            "invalid": r.fit.counts.invalid,
-            "unexplained": r.fit.counts.unexplained,
+            "readings_with_z_star": r.pairs,
+            "readings_used": r.fit.counts.used,
+            "readings_invalid": r.fit.counts.invalid,
+            "readings_unexplained": r.fit.counts.unexplained,
             "read_s": read_s,
             "cast_s": r.cast_s,
             "em_s": r.em_s,

@@ -4,8 +4,8 @@ use crate::carmen::{CarmenLog, LogError, LogStats, MaxRange, ReadOptions};
 use crate::mapping::{
     build_from_log, write_map_server, write_png, MappingOptions, FREE_THRESH, OCCUPIED_THRESH,
 };
+use crate::progress::Progress;
 use clap::{Args, Subcommand};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -78,7 +78,7 @@ fn fail(message: impl std::fmt::Display) -> ExitCode {
 }
 
 fn read_log(path: &Path, options: ReadOptions) -> Result<CarmenLog, LogError> {
-    eprintln!("reading {} …", path.display());
+    crate::progress::note(&format!("reading {} …", path.display()));
     CarmenLog::read_path(path, options)
 }
 
@@ -148,19 +148,9 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
     options.resolution_m = args.resolution;
     options.margin_m = args.margin;
     options.max_range_free_m = (args.max_range_free > 0.0).then_some(args.max_range_free);
-    let terminal = std::io::stderr().is_terminal();
-    let mut last_tenth = 0;
+    let progress = Progress::new("mapping");
     let built = build_from_log(&log, &options, |done, total| {
-        let tenth = done * 10 / total.max(1);
-        if terminal {
-            eprint!("\rmapping: {done}/{total} scans");
-            if done == total {
-                eprintln!();
-            }
-        } else if tenth > last_tenth {
-            last_tenth = tenth;
-            eprintln!("mapping: {done}/{total} scans");
-        }
+        progress.update(done, total, " scans");
     });
     let (log_odds, stats) = match built {
         Ok(b) => b,

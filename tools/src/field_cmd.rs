@@ -47,8 +47,9 @@ enum FieldCommand {
     },
     /// Draw the field as a PNG a person can read.
     ///
-    /// North up: occupied cells red, distance as grey from black
-    /// (0 m) to white (d_max), with a darker contour every 0.25 m.
+    /// North up, with a title, axes in metres (map frame), a scale bar and a key: occupied
+    /// cells red, distance as grey from black (0 m) to white (d_max), with a darker contour
+    /// every 0.25 m.
     Render {
         /// The blob.
         blob: PathBuf,
@@ -235,36 +236,6 @@ fn parse_xy(t: &str) -> Result<(f32, f32), &'static str> {
     Ok((x, y))
 }
 
-/// Renders a view as an RGB image, north up (see the `render` command's help).
-pub fn render(view: &FieldView<'_>) -> image::RgbImage {
-    let (w, h) = (view.width(), view.height());
-    let step = view.step_m();
-    let contour = 0.25f32;
-    image::RgbImage::from_fn(w, h, |x, row| {
-        let iy = h - 1 - row;
-        let code = view.code(x, iy).unwrap_or(255);
-        if code == 0 {
-            return image::Rgb([200, 0, 0]);
-        }
-        let d = f32::from(code) * step;
-        let mut g = (f32::from(code) / 255.0).sqrt() * 235.0 + 20.0;
-        // A contour where the distance crosses a multiple of 0.25 m between this cell and
-        // the one below it.
-        let below = view
-            .code(x, iy.saturating_sub(1))
-            .map_or(d, |c| f32::from(c) * step);
-        let left = view
-            .code(x.saturating_sub(1), iy)
-            .map_or(d, |c| f32::from(c) * step);
-        let k = (d / contour).floor();
-        if code < 255 && ((below / contour).floor() != k || (left / contour).floor() != k) {
-            g *= 0.6;
-        }
-        let g = g as u8;
-        image::Rgb([g, g, g])
-    })
-}
-
 fn read_blob(path: &Path) -> Result<Vec<u8>, FieldCmdError> {
     std::fs::read(path).map_err(|e| FieldCmdError::Io(path.to_path_buf(), e))
 }
@@ -344,22 +315,31 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
         }
         FieldCommand::Render { blob, output } => {
             let bytes = read_blob(&blob)?;
-            let view = FieldView::parse(&bytes).map_err(|e| FieldCmdError::Blob(blob, e))?;
-            let img = render(&view);
-            img.save_with_format(&output, image::ImageFormat::Png)
+            let view =
+                FieldView::parse(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            let name = blob.file_name().map_or_else(
+                || blob.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            let title = format!("distance field of {name}");
+            let fig = crate::field_figure::draw_field(&output, &view, &title)
                 .map_err(|e| FieldCmdError::Png(output.clone(), e.to_string()))?;
             if json {
                 println!(
                     "{}",
                     serde_json::json!({ "output": output.display().to_string(),
-                        "width": view.width(), "height": view.height() })
+                        "width_px": fig.width_px, "height_px": fig.height_px,
+                        "px_per_cell": fig.px_per_cell, "scale_bar_m": fig.scale_bar_m,
+                        "width_cells": view.width(), "height_cells": view.height() })
                 );
             } else {
                 println!(
-                    "{}: {} × {} px",
+                    "{}: {} × {} px, {} px per cell, scale bar {} m",
                     output.display(),
-                    view.width(),
-                    view.height()
+                    fig.width_px,
+                    fig.height_px,
+                    fig.px_per_cell,
+                    fig.scale_bar_m
                 );
             }
             Ok(())

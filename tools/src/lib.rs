@@ -4,12 +4,15 @@
 pub mod beam_fit;
 pub mod calibrate;
 pub mod heat_map;
+pub mod info;
 pub mod overlay;
 pub mod plot;
 pub mod pose_grid;
+pub mod progress;
 pub mod score_cmd;
 
 pub mod field_cmd;
+pub mod field_figure;
 pub mod map;
 
 pub mod carmen;

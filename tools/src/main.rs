@@ -17,7 +17,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Print the tool's version and the crate's build configuration.
+    /// Print the tool's version and the build configuration: the beamfield library's version and
+    /// features, its trigonometry backend, the blob format version, the build profile and the
+    /// target.
     Info,
     /// Distance-field blobs for the likelihood field: build one from a ROS map, query it,
     /// render it as a picture.
@@ -51,12 +53,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Info => {
-            let version = env!("CARGO_PKG_VERSION");
-            if cli.json {
-                println!("{}", serde_json::json!({ "version": version }));
-            } else {
-                println!("beamfield {version}");
-            }
+            println!("{}", beamfield_tools::info::render(cli.json));
             ExitCode::SUCCESS
         }
         Command::Field(args) => match beamfield_tools::field_cmd::run(args, cli.json) {

@@ -100,6 +100,8 @@ pub fn line_chart(path: &Path, chart: &LineChart<'_>) -> Result<(), PlotError> {
     builder
         .caption(chart.title, ("sans-serif", 22))
         .margin(14)
+        // The last tick label of the x axis is centred on the plot's right end: room for its half.
+        .margin_right(44)
         .x_label_area_size(46)
         .y_label_area_size(64);
     macro_rules! draw {
@@ -193,5 +195,53 @@ mod tests {
             }
         )
         .is_err());
+    }
+
+    /// The calibration plot's shape (log x axis from 1 to 1000): no label may run into the
+    /// picture's edges, so the outermost columns and rows stay white.
+    #[test]
+    fn tick_labels_stay_inside_the_picture() {
+        let dir = std::env::temp_dir().join(format!("bf-plot-edge-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("k.png");
+        let points = (0..=36)
+            .map(|i| {
+                let k = 10f64.powf(f64::from(i) / 12.0);
+                (k, 1.0 - 0.75 / k)
+            })
+            .collect();
+        let chart = LineChart {
+            title: "coverage of the credible set against tempering κ",
+            x_label: "κ",
+            y_label: "fraction of logged poses inside",
+            x_log: true,
+            h_lines: vec![(0.95, "requested 0.95".into())],
+            v_lines: vec![(15.0, "κ = 15.000".into())],
+            series: vec![Series {
+                name: "60 scans".into(),
+                points,
+            }],
+        };
+        line_chart(&p, &chart).unwrap();
+        let img = image::open(&p).unwrap().to_rgb8();
+        let (w, h) = img.dimensions();
+        let white = |x: u32, y: u32| img.get_pixel(x, y).0 == [255, 255, 255];
+        for y in 0..h {
+            for x in [0, 1, 2, w - 3, w - 2, w - 1] {
+                assert!(
+                    white(x, y),
+                    "pixel ({x}, {y}) at the left or right edge is drawn"
+                );
+            }
+        }
+        for x in 0..w {
+            for y in [0, 1, h - 2, h - 1] {
+                assert!(
+                    white(x, y),
+                    "pixel ({x}, {y}) at the top or bottom edge is drawn"
+                );
+            }
+        }
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

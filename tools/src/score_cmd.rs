@@ -243,18 +243,18 @@ pub fn run_score(a: &ScoreArgs, json: bool) -> Result<String, ScoreCmdError> {
     if json {
         out = serde_json::json!({
             "scan": a.scan,
-            "pose": [pose.x_m, pose.y_m, pose.theta_rad],
-            "logged_pose": [logged.x_m, logged.y_m, logged.theta_rad],
+            "pose_m_m_rad": [pose.x_m, pose.y_m, pose.theta_rad],
+            "logged_pose_m_m_rad": [logged.x_m, logged.y_m, logged.theta_rad],
             "kappa": a.kappa,
-            "log_likelihood": s.log_likelihood,
-            "scored": s.scored,
-            "max_range": s.max_range,
-            "invalid": s.invalid,
-            "unpaired": s.unpaired,
+            "log_likelihood_nats": s.log_likelihood,
+            "beams_scored": s.scored,
+            "beams_skipped_max_range": s.max_range,
+            "beams_skipped_invalid": s.invalid,
+            "beams_unpaired": s.unpaired,
             "best_grid_pose": best.as_ref().map(|b| serde_json::json!({
-                "pose": [b.pose.x_m, b.pose.y_m, b.pose.theta_rad],
+                "pose_m_m_rad": [b.pose.x_m, b.pose.y_m, b.pose.theta_rad],
                 "offset_m_m_rad": [b.offset.0, b.offset.1, b.offset.2],
-                "log_likelihood": b.log_likelihood,
+                "log_likelihood_nats": b.log_likelihood,
                 "grid_poses": b.poses,
             })),
             "files": files,
@@ -335,10 +335,10 @@ fn best_grid_pose<M: SensorModel<MAX_BEAMS>>(
             spec.len()
         )));
     }
-    eprintln!(
+    crate::progress::note(&format!(
         "score: searching {} poses for the overlay's best pose",
         spec.len()
-    );
+    ));
     let g = score_grid(model, layout, scan, pose, &spec);
     let i = argmax(&g.log_likelihood).ok_or_else(|| usage("the pose grid is empty"))?;
     Ok(BestPose {
@@ -542,6 +542,7 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
     let mut grids = Vec::with_capacity(n);
     let mut sd_sum = (0.0, 0.0, 0.0);
     let mut peak_err = Vec::with_capacity(n);
+    let progress = crate::progress::Progress::new("calibrate: scan");
     for j in 0..n {
         let i = j * total / n;
         let (scan, pose) = scan_of(&l.log, i)?;
@@ -553,13 +554,8 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
             peak_err.push((dx * dx + dy * dy).sqrt());
         }
         grids.push(g);
-        eprint!(
-            "\rcalibrate: scan {}/{n} ({} poses each)",
-            j + 1,
-            spec.len()
-        );
+        progress.update(j + 1, n, &format!(" ({} poses each)", spec.len()));
     }
-    eprintln!();
     let cal = calibrate(&grids, a.coverage);
     let nf = n as f64;
     let sd_k1 = (sd_sum.0 / nf, sd_sum.1 / nf, sd_sum.2 / nf);
@@ -604,10 +600,19 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
     );
     match (cal.kappa, cal.coverage_at_kappa) {
         (Some(k), Some(c)) => {
-            let _ = writeln!(out, "κ = {k:.2}: coverage {c:.3}");
+            let _ = writeln!(
+                out,
+                "κ = {k:.3}: coverage {c:.3} over {n} scans (the smallest κ that reaches it is \
+                 within {} % below)",
+                cal.relative_precision * 100.0
+            );
         }
         _ => {
-            let _ = writeln!(out, "no κ ≤ 1000 reaches the requested coverage");
+            let _ = writeln!(
+                out,
+                "no κ ≤ {} reaches the requested coverage over {n} scans",
+                crate::calibrate::KAPPA_MAX
+            );
         }
     }
     let _ = write!(
@@ -623,7 +628,7 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
     if let (Some(k), Some(s)) = (cal.kappa, sd_kappa) {
         let _ = write!(
             out,
-            "\nmean posterior sd at κ = {k:.2}: x {:.1} mm, y {:.1} mm, θ {:.2}°",
+            "\nmean posterior sd at κ = {k:.3}: x {:.1} mm, y {:.1} mm, θ {:.2}°",
             s.0 * 1e3,
             s.1 * 1e3,
             s.2.to_degrees()
@@ -643,7 +648,7 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
 fn plot_curve(path: &Path, cal: &Calibration) -> Result<(), ScoreCmdError> {
     let mut v_lines = Vec::new();
     if let Some(k) = cal.kappa {
-        v_lines.push((k, format!("κ = {k:.2}")));
+        v_lines.push((k, format!("κ = {k:.3}")));
     }
     line_chart(
         path,

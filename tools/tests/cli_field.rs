@@ -52,16 +52,40 @@ fn build_query_render() {
     assert!(String::from_utf8(o.stderr).unwrap().contains("line 2:"));
 
     let png = out.join("tb3.png");
-    let st = bin()
-        .args(["field", "render"])
-        .arg(&blob)
-        .arg("-o")
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(st.status.success());
-    let img = image::open(&png).unwrap();
-    assert_eq!((img.width(), img.height()), (384, 384));
+    let fig = run_json(
+        bin()
+            .args(["--json", "field", "render"])
+            .arg(&blob)
+            .arg("-o")
+            .arg(&png),
+    );
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(
+        (u64::from(img.width()), u64::from(img.height())),
+        (
+            fig["width_px"].as_u64().unwrap(),
+            fig["height_px"].as_u64().unwrap()
+        )
+    );
+    // 384 cells of 5 cm at 2 px per cell, with room around it for the title, axes and key.
+    assert_eq!(fig["px_per_cell"], 2);
+    assert!(img.width() > 768 && img.height() > 768);
+    // The scale bar: 2 m is the largest 1-2-5 length within a quarter of the 19.2 m wide map.
+    assert_eq!(fig["scale_bar_m"].as_f64(), Some(2.0));
+    // Occupied cells are drawn in red somewhere in the picture.
+    assert!(img.pixels().any(|p| p.0 == [170, 0, 0]));
+    // Nothing (title, tick labels, key) runs into the picture's edges.
+    let (w, h) = img.dimensions();
+    for y in 0..h {
+        for x in [0, w - 1] {
+            assert_eq!(img.get_pixel(x, y).0, [255; 3], "({x}, {y})");
+        }
+    }
+    for x in 0..w {
+        for y in [0, h - 1] {
+            assert_eq!(img.get_pixel(x, y).0, [255; 3], "({x}, {y})");
+        }
+    }
     std::fs::remove_dir_all(&out).ok();
 }
 

@@ -66,7 +66,7 @@ fn overlay_reports_the_grid_best_and_draws_it() {
     let best = &v["best_grid_pose"];
     // 13 × 13 positions, 9 headings (±1° in 0.25° steps).
     assert_eq!(best["grid_poses"], 13 * 13 * 9);
-    let got: Vec<f64> = best["pose"]
+    let got: Vec<f64> = best["pose_m_m_rad"]
         .as_array()
         .unwrap()
         .iter()
@@ -108,9 +108,14 @@ fn overlay_reports_the_grid_best_and_draws_it() {
         vec![f64::from(w.x_m), f64::from(w.y_m), f64::from(w.theta_rad)],
         "best pose"
     );
-    assert_eq!(best["log_likelihood"].as_f64().unwrap(), f64::from(want.0));
+    assert_eq!(
+        best["log_likelihood_nats"].as_f64().unwrap(),
+        f64::from(want.0)
+    );
     // The grid holds the given pose, so its best is at least as good.
-    assert!(best["log_likelihood"].as_f64().unwrap() >= v["log_likelihood"].as_f64().unwrap());
+    assert!(
+        best["log_likelihood_nats"].as_f64().unwrap() >= v["log_likelihood_nats"].as_f64().unwrap()
+    );
     assert!(v["files"]
         .as_array()
         .unwrap()
@@ -168,9 +173,63 @@ fn a_log_without_scans_is_named_and_max_range_can_be_given() {
     let detected = run(&[]);
     let given = run(&["--max-range", "10"]);
     let n = |v: &serde_json::Value, k: &str| v[k].as_u64().unwrap();
-    assert!(n(&given, "max_range") > n(&detected, "max_range"));
+    assert!(n(&given, "beams_skipped_max_range") > n(&detected, "beams_skipped_max_range"));
     for v in [&detected, &given] {
-        assert_eq!(n(v, "scored") + n(v, "max_range") + n(v, "invalid"), 180);
+        assert_eq!(
+            n(v, "beams_scored") + n(v, "beams_skipped_max_range") + n(v, "beams_skipped_invalid"),
+            180
+        );
     }
+    // The skipped count is the number of the scan's readings at or above the max range.
+    let log = CarmenLog::read_path(&log_path(), ReadOptions::default()).unwrap();
+    let ranges = log.scans[50].to_scan::<180>().unwrap();
+    let at_or_above = |m: f32| ranges.ranges_m().iter().filter(|&&r| r >= m).count() as u64;
+    assert_eq!(n(&given, "beams_skipped_max_range"), at_or_above(10.0));
+    assert_eq!(
+        n(&detected, "beams_skipped_max_range"),
+        at_or_above(log.max_range.value_m().unwrap())
+    );
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// `beamfield calibrate` on three Intel scans and a coarse grid: κ is bracketed to the stated
+/// relative precision, the coverage is reached at κ, the scans used are reported, the plot is
+/// written, and with stderr not a terminal (a pipe here) no progress is written to it.
+#[test]
+fn calibrate_brackets_kappa_and_keeps_stderr_quiet() {
+    let out = scratch("calibrate");
+    let png = out.join("calib.png");
+    let mut cmd = bin();
+    cmd.args(["--json", "calibrate", "--field"])
+        .arg(blob_path())
+        .arg("--log")
+        .arg(log_path())
+        .args(["--scans", "3", "--half-xy", "0.04", "--step-xy", "0.01"])
+        .args(["--half-deg", "1", "--step-deg", "0.5", "-o"])
+        .arg(&png);
+    let o = cmd.output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.stderr.is_empty(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let cal = &v["calibration"];
+    assert_eq!(cal["scans"], 3);
+    let level = cal["level"].as_f64().unwrap();
+    assert_eq!(level, 0.95);
+    let precision = cal["relative_precision"].as_f64().unwrap();
+    assert!(precision > 0.0 && precision <= 0.01, "{precision}");
+    let k = cal["kappa"].as_f64().unwrap();
+    assert!(cal["coverage_at_kappa"].as_f64().unwrap() >= level);
+    if cal["coverage_at_1"].as_f64().unwrap() < level {
+        let below = cal["kappa_below"].as_f64().unwrap();
+        assert!(below < k && k / below <= 1.0 + precision, "{below} .. {k}");
+    } else {
+        assert_eq!(k, 1.0);
+    }
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (900, 560));
     std::fs::remove_dir_all(&out).ok();
 }
