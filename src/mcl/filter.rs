@@ -329,6 +329,21 @@ impl<'p, const N: usize> Mcl<'p, N> {
         }
     }
 
+    /// Replaces every particle `x` by `f(x)` (heading wrapped), keeping weights and the
+    /// recovery averages: for a map-frame correction, or to simulate a kidnapping in a test.
+    /// A non-finite result leaves that particle where it was. Returns how many moved.
+    pub fn move_particles<F: FnMut(&Pose) -> Pose>(&mut self, mut f: F) -> usize {
+        let mut moved = 0;
+        for p in self.store.poses.iter_mut().take(self.len) {
+            let q = f(p);
+            if q.is_finite() {
+                *p = Pose::new(q.x_m, q.y_m, wrap_angle(q.theta_rad));
+                moved += 1;
+            }
+        }
+        moved
+    }
+
     /// Reweights by a prepared tempered likelihood-field scan ([`TemperedScan::score`]; the
     /// fast path) and finishes the update (see [`Mcl::update_with`]).
     ///
@@ -344,7 +359,8 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if scan.prepared().is_empty() {
             return Err(MclError::EmptyScan);
         }
-        self.update_with(|p| scan.score(p).log_likelihood, free, rng)
+        let per_beam = 1.0 / scan.prepared().len() as f32;
+        self.update_scaled(|p| scan.score(p).log_likelihood, per_beam, free, rng)
     }
 
     /// Reweights by any [`SensorModel`] (e.g. a [`crate::Tempered`] beam model) and finishes the
@@ -387,7 +403,17 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// `−∞` (the weights are reset to uniform, the particles and averages kept).
     pub fn update_with<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
         &mut self,
+        log_likelihood: F,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        self.update_scaled(log_likelihood, 1.0, free, rng)
+    }
+
+    fn update_scaled<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
+        &mut self,
         mut log_likelihood: F,
+        recovery_scale: f32,
         free: Option<&FreeSpace<'_>>,
         rng: &mut R,
     ) -> Result<Update, MclError> {
@@ -420,7 +446,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added above, so the
         // normalizer's total is the average likelihood itself.
         let ln_avg = normalized.log_total;
-        let random_fraction = self.track_likelihood(ln_avg);
+        let random_fraction = self.track_likelihood(ln_avg * recovery_scale);
         self.estimate = Estimate::of(self.poses(), self.weights());
         let u = uniform_f32(rng);
         let m = if free.is_some() {

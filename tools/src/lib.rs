@@ -8,6 +8,7 @@ pub mod overlay;
 pub mod plot;
 pub mod pose_grid;
 pub mod score_cmd;
+pub mod track;
 
 pub mod field_cmd;
 pub mod map;
