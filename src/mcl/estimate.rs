@@ -24,8 +24,50 @@ impl Estimate {
     ///
     /// Two passes: means, then second moments about the means (no cancellation).
     pub fn of(poses: &[Pose], weights: &[f32]) -> Self {
+        Self::of_selected(poses, weights, |_| true)
+    }
+
+    /// The estimate of the particles within `radius_m` (metres) and `half_angle_rad` (radians)
+    /// of `center` only, their weights renormalized: the mode's neighbourhood, so that a few
+    /// far particles (recovery's random ones, a second hypothesis) do not drag the mean into a
+    /// wall. The ESS is still that of the whole set. If no particle is within, it is
+    /// [`Estimate::of`] the whole set.
+    pub fn around(
+        poses: &[Pose],
+        weights: &[f32],
+        center: &Pose,
+        radius_m: f32,
+        half_angle_rad: f32,
+    ) -> Self {
+        let r2 = radius_m * radius_m;
+        let near = |p: &Pose| {
+            let (dx, dy) = (p.x_m - center.x_m, p.y_m - center.y_m);
+            dx * dx + dy * dy <= r2
+                && wrap_angle(p.theta_rad - center.theta_rad).abs() <= half_angle_rad
+        };
+        let all: f32 = weights.iter().map(|w| w * w).sum();
+        let mut e = Self::of_selected(poses, weights, near);
+        if e.ess == 0.0 {
+            e = Self::of(poses, weights);
+        }
+        e.ess = if all > 0.0 { 1.0 / all } else { 0.0 };
+        e
+    }
+
+    fn of_selected<F: Fn(&Pose) -> bool>(poses: &[Pose], weights: &[f32], keep: F) -> Self {
+        let mut total = 0.0f32;
+        for (p, &w) in poses.iter().zip(weights) {
+            if keep(p) {
+                total += w;
+            }
+        }
+        if total <= 0.0 {
+            return Self::default();
+        }
+        let inv = 1.0 / total;
         let (mut sx, mut sy, mut ss, mut sc, mut sw2) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
         for (p, &w) in poses.iter().zip(weights) {
+            let w = if keep(p) { w * inv } else { 0.0 };
             sx += w * p.x_m;
             sy += w * p.y_m;
             let (s, c) = math::sin_cos(p.theta_rad);
@@ -36,6 +78,7 @@ impl Estimate {
         let theta = wrap_angle(math::atan2(ss, sc));
         let mut cov = [[0.0f32; 3]; 3];
         for (p, &w) in poses.iter().zip(weights) {
+            let w = if keep(p) { w * inv } else { 0.0 };
             let d = [p.x_m - sx, p.y_m - sy, wrap_angle(p.theta_rad - theta)];
             for (row, di) in cov.iter_mut().zip(d) {
                 for (cell, dj) in row.iter_mut().zip(d) {

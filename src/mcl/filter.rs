@@ -16,6 +16,12 @@ use rand_core::Rng;
 /// Largest particle capacity: the resampling scratch holds one `u16` count per particle.
 pub const MAX_PARTICLES: usize = u16::MAX as usize;
 
+/// The estimate after an update is taken over the particles within this distance (metres) of
+/// the highest-weighted one …
+pub const ESTIMATE_RADIUS_M: f32 = 1.0;
+/// … and within this heading difference (radians, about 29°); see [`Estimate::around`].
+pub const ESTIMATE_HALF_ANGLE_RAD: f32 = 0.5;
+
 /// Errors of the localizer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -161,14 +167,19 @@ pub struct Update {
 /// One cycle: [`Mcl::predict`] with the odometry step, then one of the update methods
 /// ([`Mcl::update_prepared`], [`Mcl::update_model`], [`Mcl::update_with`]) with the scan.
 /// Every update reweights the particles (`wᵢ ← wᵢ·p(z | xᵢ)`, in log space, normalized with
-/// [`normalize_log_weights`]), computes the [`Estimate`], and resamples (Table 4.4) when the
+/// [`normalize_log_weights`]), computes the [`Estimate`] (over the neighbourhood of the
+/// highest-weighted particle, [`ESTIMATE_RADIUS_M`], [`ESTIMATE_HALF_ANGLE_RAD`]: AMCL likewise
+/// reports its heaviest cluster, not the mean of the whole set), and resamples (Table 4.4) when the
 /// effective sample size falls below the configured fraction or when recovery asks for random
 /// particles.
 ///
 /// # Recovery (Table 8.3)
 /// `w_slow` and `w_fast` follow the average likelihood `w_avg` with rates `α_slow < α_fast`
 /// (kept as logarithms: a scan likelihood of e⁻³⁰⁰ is normal and underflows f32). Both start at
-/// the first `w_avg`. At each update, `m = ⌊n·max(0, 1 − w_fast/w_slow) + u⌋` (stochastic
+/// the first `w_avg`. With [`Mcl::update_prepared`] and [`Mcl::update_model`], `w_avg` is taken
+/// per scored beam (`ln w_avg` divided by the beam count, the geometric mean over the beams), so
+/// that a scan with more or fewer beams does not by itself look like a collapse;
+/// [`Mcl::update_with`] uses the log-likelihoods as given. At each update, `m = ⌊n·max(0, 1 − w_fast/w_slow) + u⌋` (stochastic
 /// rounding, `u` uniform) particles are replaced at resampling by poses uniform over the
 /// [`FreeSpace`] passed to the update; with no free space, none are.
 #[derive(Debug)]
@@ -447,7 +458,18 @@ impl<'p, const N: usize> Mcl<'p, N> {
         // normalizer's total is the average likelihood itself.
         let ln_avg = normalized.log_total;
         let random_fraction = self.track_likelihood(ln_avg * recovery_scale);
-        self.estimate = Estimate::of(self.poses(), self.weights());
+        let best = self
+            .poses()
+            .get(normalized.best)
+            .copied()
+            .unwrap_or_default();
+        self.estimate = Estimate::around(
+            self.poses(),
+            self.weights(),
+            &best,
+            ESTIMATE_RADIUS_M,
+            ESTIMATE_HALF_ANGLE_RAD,
+        );
         let u = uniform_f32(rng);
         let m = if free.is_some() {
             ((n as f32 * random_fraction + u) as usize).min(n)
@@ -542,6 +564,12 @@ mod tests {
 
     fn config() -> MclConfig {
         MclConfig::new(OdometryNoise::uniform(0.005).unwrap(), 0.5, 0.001, 0.1).unwrap()
+    }
+
+    #[test]
+    fn eighteen_bytes_per_particle() {
+        assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
+        assert!(core::mem::size_of::<Mcl<'_, 1000>>() <= 128);
     }
 
     #[test]

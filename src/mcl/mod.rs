@@ -22,6 +22,9 @@ pub mod resample;
 pub mod rng;
 
 pub use estimate::Estimate;
-pub use filter::{Mcl, MclConfig, MclError, Particles, Update, MAX_PARTICLES};
+pub use filter::{
+    Mcl, MclConfig, MclError, Particles, Update, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M,
+    MAX_PARTICLES,
+};
 pub use motion::{MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M};
 pub use rng::SplitMix64;

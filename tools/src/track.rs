@@ -109,8 +109,9 @@ pub struct TrackArgs {
     /// Particle weighting.
     #[arg(long, value_enum, default_value_t = Weighting::Product)]
     pub weighting: Weighting,
-    /// Augmented-MCL recovery rates "SLOW,FAST" (recovery_alpha_slow/fast; "0,0" turns it off).
-    #[arg(long, default_value = "0.001,0.1")]
+    /// Augmented-MCL recovery rates "SLOW,FAST" (recovery_alpha_slow/fast, e.g. "0.001,0.1";
+    /// the default "0,0" turns it off, as AMCL's defaults do).
+    #[arg(long, default_value = "0,0")]
     pub recovery: String,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
