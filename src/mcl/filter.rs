@@ -2,7 +2,7 @@
 //! (Table 8.3), on caller-placed storage.
 
 use super::estimate::Estimate;
-use super::motion::{OdometryNoise, OdometryStep};
+use super::motion::{sample_with, OdometryNoise, OdometryStep};
 use super::resample::{apply_counts, low_variance_counts};
 use crate::field::FreeSpace;
 use crate::gaussian::{standard_normal_pair, uniform_f32};
@@ -334,9 +334,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if *step == OdometryStep::STILL {
             return;
         }
-        let noise = self.config.noise;
+        let sigmas = self.config.noise.sigmas(step);
         for p in self.store.poses.iter_mut().take(self.len) {
-            *p = noise.sample(p, step, rng);
+            *p = sample_with(p, step, sigmas, rng);
         }
     }
 

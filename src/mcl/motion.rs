@@ -114,18 +114,29 @@ impl OdometryNoise {
     /// δtrans (first pair) and of δrot2 (first value of the second pair; the second value is
     /// discarded). The returned heading is wrapped into `[−π, π)`.
     pub fn sample<R: Rng + ?Sized>(&self, pose: &Pose, step: &OdometryStep, rng: &mut R) -> Pose {
-        let (s_rot1, s_trans, s_rot2) = self.sigmas(step);
-        let (n1, n2) = standard_normal_pair(rng);
-        let (n3, _) = standard_normal_pair(rng);
-        let rot1 = step.rot1_rad - s_rot1 * n1;
-        let trans = step.trans_m - s_trans * n2;
-        let rot2 = step.rot2_rad - s_rot2 * n3;
-        let (s, c) = math::sin_cos(pose.theta_rad + rot1);
-        Pose {
-            x_m: pose.x_m + trans * c,
-            y_m: pose.y_m + trans * s,
-            theta_rad: wrap_angle(pose.theta_rad + rot1 + rot2),
-        }
+        sample_with(pose, step, self.sigmas(step), rng)
+    }
+}
+
+/// [`OdometryNoise::sample`] with the standard deviations already computed
+/// ([`OdometryNoise::sigmas`]): they depend on the step only, so a filter computes them once
+/// per step, not once per particle. Same draws, same result.
+pub fn sample_with<R: Rng + ?Sized>(
+    pose: &Pose,
+    step: &OdometryStep,
+    (s_rot1, s_trans, s_rot2): (f32, f32, f32),
+    rng: &mut R,
+) -> Pose {
+    let (n1, n2) = standard_normal_pair(rng);
+    let (n3, _) = standard_normal_pair(rng);
+    let rot1 = step.rot1_rad - s_rot1 * n1;
+    let trans = step.trans_m - s_trans * n2;
+    let rot2 = step.rot2_rad - s_rot2 * n3;
+    let (s, c) = math::sin_cos(pose.theta_rad + rot1);
+    Pose {
+        x_m: pose.x_m + trans * c,
+        y_m: pose.y_m + trans * s,
+        theta_rad: wrap_angle(pose.theta_rad + rot1 + rot2),
     }
 }
 

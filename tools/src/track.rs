@@ -128,7 +128,7 @@ pub struct TrackArgs {
     /// Stop after this many scans (default: the whole log).
     #[arg(long)]
     pub scans: Option<usize>,
-    /// Draw the estimated (red) and logged (blue) trajectories over the map (first seed).
+    /// Draw the estimated (green) and logged (blue) trajectories over the map (first seed).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
 }
@@ -716,7 +716,7 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
     Ok(s)
 }
 
-/// Draws the logged (blue) and estimated (red) trajectories over the rendered field, 2 pixels
+/// Draws the logged (blue) and estimated (green) trajectories over the rendered field, one pixel
 /// per cell, north up.
 fn draw_track(
     path: &Path,
@@ -726,7 +726,7 @@ fn draw_track(
 ) -> Result<(), TrackError> {
     let (view, _) = input.views()?;
     let base = render(&view);
-    let scale = 2u32;
+    let scale = 1u32;
     let img = image::imageops::resize(
         &base,
         base.width() * scale,
@@ -761,7 +761,7 @@ fn draw_track(
         line(to_px(&pair[0]), to_px(&pair[1]), [30, 80, 230]);
     }
     for pair in r.estimates.windows(2) {
-        line(to_px(&pair[0]), to_px(&pair[1]), [230, 30, 30]);
+        line(to_px(&pair[0]), to_px(&pair[1]), [0, 170, 0]);
     }
     img.save_with_format(path, image::ImageFormat::Png)
         .map_err(|e| TrackError::Png(path.to_path_buf(), e.to_string()))
