@@ -5,6 +5,8 @@
 //!   `odom_alpha1..4` variance convention.
 //! - [`resample`]: low-variance resampling (Table 4.4) in place, one `u16` per particle.
 //! - [`estimate`]: weighted mean, circular mean heading, covariance, effective sample size.
+//! - [`config`]: [`Particles`] (the caller-placed storage), [`MclConfig`], [`MclError`],
+//!   [`Update`].
 //! - [`filter`]: [`Mcl`] over [`Particles`]: prediction, reweighting by any
 //!   [`SensorModel`](crate::SensorModel) or a prepared tempered scan, resampling when the
 //!   effective sample size drops, augmented-MCL recovery (Table 8.3) from a
@@ -15,16 +17,15 @@
 //! [`Particles`], plus a fixed ~80 bytes in [`Mcl`]. See `docs/localization.md` for the
 //! measurements on the Intel lab log.
 
+pub mod config;
 pub mod estimate;
 pub mod filter;
 pub mod motion;
 pub mod resample;
 pub mod rng;
 
+pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES};
 pub use estimate::Estimate;
-pub use filter::{
-    Mcl, MclConfig, MclError, Particles, Update, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M,
-    MAX_PARTICLES,
-};
+pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
 pub use motion::{MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M};
 pub use rng::SplitMix64;
