@@ -15,6 +15,7 @@ pub mod gaussian;
 pub mod intrinsics;
 pub mod landmark;
 pub mod math;
+pub mod mcl;
 pub mod model;
 pub mod pose;
 pub mod raycast;

@@ -7,6 +7,8 @@
 //!   together and round-trip. Specified in `docs/blob-format.md`.
 //! - [`view`]: [`FieldView`], a validated zero-copy view of a blob, with infallible lookups.
 //! - [`likelihood`]: [`LikelihoodField`], the likelihood field model scored over a view.
+//! - [`free_space`]: [`FreeSpace`], the known-free cells packed for uniform sampling (a section
+//!   beside the blob, `docs/free-space-format.md`).
 //! - [`prepared`]: [`PreparedScan`], a scan made ready to be scored at many poses (the fast
 //!   per-beam path).
 //!
@@ -15,6 +17,7 @@
 
 pub mod blob;
 pub mod edt;
+pub mod free_space;
 pub mod likelihood;
 pub mod prepared;
 pub mod view;
@@ -24,6 +27,10 @@ pub use blob::{
     BLOB_MAX_SIDE, BLOB_VERSION, CODE_MAX, DEFAULT_MAX_DIST_M, ENCODING_U8_LINEAR,
 };
 pub use edt::{edt_scratch_len, squared_edt, EdtError, EdtScratch, EDT_INFINITY, EDT_MAX_SIDE};
+pub use free_space::{
+    emit_free_space, free_space_len, FreeSpace, FreeSpaceError, FreeSpaceGrid,
+    FREE_SPACE_HEADER_LEN, FREE_SPACE_MAGIC, FREE_SPACE_RUN_LEN, FREE_SPACE_VERSION,
+};
 pub use likelihood::{
     LikelihoodError, LikelihoodField, LikelihoodParam, LikelihoodParams, LIKELIHOOD_TABLE_LEN,
 };

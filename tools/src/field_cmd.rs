@@ -5,6 +5,7 @@ use beamfield::field::{
     edt_scratch_len, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError, EdtScratch,
     FieldHeader, FieldView, DEFAULT_MAX_DIST_M, EDT_INFINITY,
 };
+use beamfield::field::{emit_free_space, free_space_len, FreeSpaceError, FreeSpaceGrid};
 use clap::{Args, Subcommand};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
@@ -34,6 +35,10 @@ enum FieldCommand {
         /// Clamp distance d_max in metres (AMCL's laser_likelihood_max_dist).
         #[arg(long = "max-dist", default_value_t = DEFAULT_MAX_DIST_M)]
         max_dist: f32,
+        /// Append a free-space section (the map's known-free cells, p < free_thresh, for
+        /// uniform particle sampling; docs/free-space-format.md) right after the blob.
+        #[arg(long = "free-space")]
+        free_space: bool,
     },
     /// Look up distances: "x,y" lines on stdin, "x,y,distance_m" on stdout.
     ///
@@ -78,6 +83,8 @@ pub enum FieldCmdError {
     Png(PathBuf, String),
     /// Some query lines were malformed (count).
     BadLines(usize),
+    /// The free-space section could not be built (e.g. the map has no free cell).
+    FreeSpace(FreeSpaceError),
 }
 
 impl std::fmt::Display for FieldCmdError {
@@ -91,6 +98,7 @@ impl std::fmt::Display for FieldCmdError {
             Self::Header(e) => write!(f, "map cannot be stored as a blob: {e}"),
             Self::Png(p, e) => write!(f, "{}: {e}", p.display()),
             Self::BadLines(n) => write!(f, "{n} malformed input line(s)"),
+            Self::FreeSpace(e) => write!(f, "free-space section: {e}"),
         }
     }
 }
@@ -236,6 +244,29 @@ fn parse_xy(t: &str) -> Result<(f32, f32), &'static str> {
     Ok((x, y))
 }
 
+/// The free-space section of `map` (docs/free-space-format.md): its free cells (map_server's
+/// `p < free_thresh`), on the grid of the blob [`build_blob`] writes for it.
+///
+/// # Errors
+/// [`FieldCmdError::Header`] when the map cannot be a blob, [`FieldCmdError::FreeSpace`]
+/// when it has no free cell.
+pub fn build_free_space(map: &OccupancyMap) -> Result<Vec<u8>, FieldCmdError> {
+    let h = header_for(map, DEFAULT_MAX_DIST_M);
+    h.validate().map_err(FieldCmdError::Header)?;
+    let grid = FreeSpaceGrid {
+        width: h.width,
+        height: h.height,
+        cell_size_m: h.cell_size_m,
+        origin_x_m: h.origin_x_m,
+        origin_y_m: h.origin_y_m,
+    };
+    let free: Vec<bool> = map.cells.iter().map(|c| *c == Occupancy::Free).collect();
+    let n = free_space_len(&grid, &free).map_err(FieldCmdError::FreeSpace)?;
+    let mut out = vec![0u8; n];
+    emit_free_space(&grid, &free, &mut out).map_err(FieldCmdError::FreeSpace)?;
+    Ok(out)
+}
+
 fn read_blob(path: &Path) -> Result<Vec<u8>, FieldCmdError> {
     std::fs::read(path).map_err(|e| FieldCmdError::Io(path.to_path_buf(), e))
 }
@@ -250,11 +281,16 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             map,
             output,
             max_dist,
+            free_space,
         } => {
             let t0 = Instant::now();
             let m = load_map(&map).map_err(FieldCmdError::Map)?;
             let t1 = Instant::now();
-            let blob = build_blob(&m, max_dist)?;
+            let mut blob = build_blob(&m, max_dist)?;
+            let blob_len = blob.len();
+            if free_space {
+                blob.extend(build_free_space(&m)?);
+            }
             let t2 = Instant::now();
             std::fs::write(&output, &blob).map_err(|e| FieldCmdError::Io(output.clone(), e))?;
             let cells = u64::from(m.width) * u64::from(m.height);
@@ -269,7 +305,8 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                         "occupied_cells": m.occupied_count(),
                         "max_dist_m": max_dist,
                         "bytes": blob.len(),
-                        "bytes_per_cell": blob.len() as f64 / cells as f64,
+                        "free_space_bytes": blob.len() - blob_len,
+                        "bytes_per_cell": blob_len as f64 / cells as f64,
                         "load_ms": (t1 - t0).as_secs_f64() * 1e3,
                         "build_ms": (t2 - t1).as_secs_f64() * 1e3,
                     })
@@ -277,7 +314,7 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             } else {
                 println!(
                     "{}: {} × {} cells of {} m, origin ({}, {}), {} occupied, d_max {} m \
-                     (step {:.4} m); {} bytes ({:.4} bytes/cell); load {:.1} ms, transform+encode {:.1} ms",
+                     (step {:.4} m); {} bytes ({:.4} bytes/cell){}; load {:.1} ms, transform+encode {:.1} ms",
                     output.display(),
                     m.width,
                     m.height,
@@ -287,8 +324,13 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                     m.occupied_count(),
                     max_dist,
                     max_dist / 255.0,
-                    blob.len(),
-                    blob.len() as f64 / cells as f64,
+                    blob_len,
+                    blob_len as f64 / cells as f64,
+                    if free_space {
+                        format!(" + {} bytes of free space", blob.len() - blob_len)
+                    } else {
+                        String::new()
+                    },
                     (t1 - t0).as_secs_f64() * 1e3,
                     (t2 - t1).as_secs_f64() * 1e3,
                 );
@@ -297,7 +339,8 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
         }
         FieldCommand::Query { blob } => {
             let bytes = read_blob(&blob)?;
-            let view = FieldView::parse(&bytes).map_err(|e| FieldCmdError::Blob(blob, e))?;
+            let (view, _) =
+                FieldView::parse_prefix(&bytes).map_err(|e| FieldCmdError::Blob(blob, e))?;
             let stdin = std::io::stdin();
             let report = run_query(
                 &view,
@@ -315,8 +358,8 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
         }
         FieldCommand::Render { blob, output } => {
             let bytes = read_blob(&blob)?;
-            let view =
-                FieldView::parse(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            let (view, _) = FieldView::parse_prefix(&bytes)
+                .map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
             let name = blob.file_name().map_or_else(
                 || blob.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),

@@ -10,6 +10,7 @@ pub mod plot;
 pub mod pose_grid;
 pub mod progress;
 pub mod score_cmd;
+pub mod track;
 
 pub mod field_cmd;
 pub mod field_figure;

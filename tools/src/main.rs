@@ -30,6 +30,10 @@ enum Command {
     /// The smallest tempering κ whose credible sets over a local pose grid hold the logged
     /// poses at the requested rate; coverage at κ = 1 and at κ, and a coverage-vs-κ PNG.
     Calibrate(beamfield_tools::score_cmd::CalibrateArgs),
+    /// Monte Carlo localization over a whole CARMEN log against its logged poses (odometry
+    /// synthesized from them with the motion model's noise): tracking error, global
+    /// localization, kidnapping; a PNG of the tracks over the map.
+    Track(beamfield_tools::track::TrackArgs),
     /// Fit the beam model's intrinsics (EM) to a CARMEN log, z* ray cast through a blob.
     Fit(beamfield_tools::beam_fit::FitArgs),
     /// Ultrasonic ring tools (firing schedules and crosstalk).
@@ -71,6 +75,16 @@ fn main() -> ExitCode {
             "calibrate",
             beamfield_tools::score_cmd::run_calibrate(&args, cli.json),
         ),
+        Command::Track(args) => match beamfield_tools::track::run(&args, cli.json) {
+            Ok(out) => {
+                println!("{out}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("beamfield track: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Fit(args) => match beamfield_tools::beam_fit::run(&args, cli.json) {
             Ok(out) => {
                 println!("{out}");

@@ -1,0 +1,148 @@
+//! The localizer's storage, parameters, errors and update report.
+
+use super::estimate::Estimate;
+use super::motion::OdometryNoise;
+use crate::pose::Pose;
+
+/// Largest particle capacity: the resampling scratch holds one `u16` count per particle.
+pub const MAX_PARTICLES: usize = u16::MAX as usize;
+
+/// Errors of the localizer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum MclError {
+    /// The capacity `N` is 0, or an initialization asked for 0 particles.
+    ZeroParticles,
+    /// More particles than the capacity `N`, or than [`MAX_PARTICLES`].
+    TooManyParticles,
+    /// The filter has not been initialized.
+    NotInitialized,
+    /// A configuration value is out of range (which one: see [`MclConfig::new`]).
+    BadConfig,
+    /// An initial pose or spread is NaN, infinite or negative.
+    BadInitialPose,
+    /// The scan has no beam to score (empty or all invalid): the measurement was skipped, the
+    /// particles and weights are unchanged.
+    EmptyScan,
+    /// Every particle scored `−∞`: the measurement was discarded and the weights reset to
+    /// uniform (the particles are unchanged).
+    AllImpossible,
+}
+
+impl core::fmt::Display for MclError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::ZeroParticles => "zero particles",
+            Self::TooManyParticles => "more particles than the capacity",
+            Self::NotInitialized => "filter not initialized",
+            Self::BadConfig => "configuration value out of range",
+            Self::BadInitialPose => "initial pose or spread not finite",
+            Self::EmptyScan => "scan has no beam to score",
+            Self::AllImpossible => "every particle is impossible",
+        })
+    }
+}
+
+impl core::error::Error for MclError {}
+
+/// Storage for up to `N` particles: pose (12 B), weight (4 B) and resampling count (2 B) each,
+/// 18 bytes per particle of capacity. Build it with [`Particles::new`] (a `const fn`, so it can
+/// be a `static`) and lend it to [`Mcl::new`](super::Mcl::new).
+#[derive(Clone, Debug)]
+pub struct Particles<const N: usize> {
+    pub(super) poses: [Pose; N],
+    pub(super) weights: [f32; N],
+    pub(super) counts: [u16; N],
+}
+
+impl<const N: usize> Particles<N> {
+    /// Empty storage (all zeros).
+    pub const fn new() -> Self {
+        Self {
+            poses: [Pose::new(0.0, 0.0, 0.0); N],
+            weights: [0.0; N],
+            counts: [0; N],
+        }
+    }
+}
+
+impl<const N: usize> Default for Particles<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The filter's parameters (validated by [`MclConfig::new`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MclConfig {
+    pub(super) noise: OdometryNoise,
+    pub(super) resample_ess_fraction: f32,
+    pub(super) recovery_alpha_slow: f32,
+    pub(super) recovery_alpha_fast: f32,
+}
+
+impl MclConfig {
+    /// - `noise`: the odometry motion model's `odom_alpha1..4`;
+    /// - `resample_ess_fraction` in `[0, 1]`: resample when the effective sample size falls
+    ///   below this fraction of the particle count (1 resamples at every update but a perfectly
+    ///   even one; 0.5 is the usual choice);
+    /// - `recovery_alpha_slow`, `recovery_alpha_fast` in `[0, 1]` (Thrun Table 8.3, AMCL's
+    ///   `recovery_alpha_slow/fast`): the decay rates of the long- and short-term averages of
+    ///   the measurement likelihood; `0 ≤ slow < fast`, or both 0 to turn recovery off.
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] for a value out of range or NaN.
+    pub fn new(
+        noise: OdometryNoise,
+        resample_ess_fraction: f32,
+        recovery_alpha_slow: f32,
+        recovery_alpha_fast: f32,
+    ) -> Result<Self, MclError> {
+        let unit = |a: f32| (0.0..=1.0).contains(&a);
+        let recovery_ok = (recovery_alpha_slow == 0.0 && recovery_alpha_fast == 0.0)
+            || recovery_alpha_slow < recovery_alpha_fast;
+        if !(unit(resample_ess_fraction)
+            && unit(recovery_alpha_slow)
+            && unit(recovery_alpha_fast)
+            && recovery_ok)
+        {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self {
+            noise,
+            resample_ess_fraction,
+            recovery_alpha_slow,
+            recovery_alpha_fast,
+        })
+    }
+
+    /// The motion model.
+    pub fn noise(&self) -> &OdometryNoise {
+        &self.noise
+    }
+
+    /// True when augmented-MCL recovery is on.
+    pub fn recovery(&self) -> bool {
+        self.recovery_alpha_fast > 0.0
+    }
+}
+
+/// What one measurement update did.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Update {
+    /// The estimate from the weighted set, before resampling.
+    pub estimate: Estimate,
+    /// `ln` of the average measurement likelihood `Σ wᵢ p(z | xᵢ)` (nats; the weights before
+    /// the update sum to 1), Table 8.3's `w_avg`.
+    pub ln_avg_likelihood: f32,
+    /// Table 8.3's `max(0, 1 − w_fast / w_slow)`: the fraction of particles to replace by random
+    /// ones at this resampling.
+    pub random_fraction: f32,
+    /// True when the set was resampled.
+    pub resampled: bool,
+    /// Random particles drawn from free space at this resampling.
+    pub injected: u16,
+}

@@ -1,0 +1,532 @@
+//! The particle filter: Monte Carlo localization (Thrun Table 8.2) with augmented-MCL recovery
+//! (Table 8.3), on caller-placed storage.
+
+use super::config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES};
+use super::estimate::Estimate;
+use super::motion::{sample_with, OdometryStep};
+use super::resample::{apply_counts, low_variance_counts};
+use crate::field::FreeSpace;
+use crate::gaussian::{standard_normal_pair, uniform_f32};
+use crate::math;
+use crate::model::SensorModel;
+use crate::pose::{wrap_angle, Pose};
+use crate::scan::{BeamLayout, Scan};
+use crate::tempered::{normalize_log_weights, NormalizeError, TemperedScan};
+use rand_core::Rng;
+
+/// The estimate after an update is taken over the particles within this distance (metres) of
+/// the highest-weighted one …
+pub const ESTIMATE_RADIUS_M: f32 = 1.0;
+/// … and within this heading difference (radians, about 29°); see [`Estimate::around`].
+pub const ESTIMATE_HALF_ANGLE_RAD: f32 = 0.5;
+
+/// Monte Carlo localization over caller-placed [`Particles`].
+///
+/// One cycle: [`Mcl::predict`] with the odometry step, then one of the update methods
+/// ([`Mcl::update_prepared`], [`Mcl::update_model`], [`Mcl::update_with`]) with the scan.
+/// Every update reweights the particles (`wᵢ ← wᵢ·p(z | xᵢ)`, in log space, normalized with
+/// [`normalize_log_weights`]), computes the [`Estimate`] (over the neighbourhood of the
+/// highest-weighted particle, [`ESTIMATE_RADIUS_M`], [`ESTIMATE_HALF_ANGLE_RAD`]: AMCL likewise
+/// reports its heaviest cluster, not the mean of the whole set), and resamples (Table 4.4) when the
+/// effective sample size falls below the configured fraction or when recovery asks for random
+/// particles.
+///
+/// # Recovery (Table 8.3)
+/// `w_slow` and `w_fast` follow the average likelihood `w_avg` with rates `α_slow < α_fast`
+/// (kept as logarithms: a scan likelihood of e⁻³⁰⁰ is normal and underflows f32). Both start at
+/// the first `w_avg`. With [`Mcl::update_prepared`] and [`Mcl::update_model`], `w_avg` is taken
+/// per scored beam (`ln w_avg` divided by the beam count, the geometric mean over the beams), so
+/// that a scan with more or fewer beams does not by itself look like a collapse;
+/// [`Mcl::update_with`] uses the log-likelihoods as given. At each update, `m = ⌊n·max(0, 1 − w_fast/w_slow) + u⌋` (stochastic
+/// rounding, `u` uniform) particles are replaced at resampling by poses uniform over the
+/// [`FreeSpace`] passed to the update; with no free space, none are.
+#[derive(Debug)]
+pub struct Mcl<'p, const N: usize> {
+    store: &'p mut Particles<N>,
+    len: usize,
+    config: MclConfig,
+    /// The weights are all `1/len` (skip their logarithm at the next update).
+    uniform: bool,
+    ln_w_slow: f32,
+    ln_w_fast: f32,
+    estimate: Estimate,
+}
+
+impl<'p, const N: usize> Mcl<'p, N> {
+    /// A filter on `store`, not yet initialized.
+    ///
+    /// # Errors
+    /// [`MclError::ZeroParticles`] for `N = 0`, [`MclError::TooManyParticles`] for `N` above
+    /// [`MAX_PARTICLES`].
+    pub fn new(store: &'p mut Particles<N>, config: MclConfig) -> Result<Self, MclError> {
+        if N == 0 {
+            return Err(MclError::ZeroParticles);
+        }
+        if N > MAX_PARTICLES {
+            return Err(MclError::TooManyParticles);
+        }
+        Ok(Self {
+            store,
+            len: 0,
+            config,
+            uniform: true,
+            ln_w_slow: f32::NEG_INFINITY,
+            ln_w_fast: f32::NEG_INFINITY,
+            estimate: Estimate::default(),
+        })
+    }
+
+    fn check_count(count: usize) -> Result<(), MclError> {
+        if count == 0 {
+            Err(MclError::ZeroParticles)
+        } else if count > N {
+            Err(MclError::TooManyParticles)
+        } else {
+            Ok(())
+        }
+    }
+
+    fn reset_weights(&mut self, count: usize) {
+        self.len = count;
+        let w = 1.0 / count as f32;
+        self.store
+            .weights
+            .iter_mut()
+            .take(count)
+            .for_each(|x| *x = w);
+        self.uniform = true;
+        self.ln_w_slow = f32::NEG_INFINITY;
+        self.ln_w_fast = f32::NEG_INFINITY;
+        self.estimate = Estimate::of(self.poses(), self.weights());
+    }
+
+    /// Initializes `count` particles around `mean`: normal in x, y (σ `sigma_xy_m`, metres) and
+    /// heading (σ `sigma_theta_rad`), independent; equal weights.
+    ///
+    /// # Random numbers
+    /// Four `next_u32` per particle (two [`standard_normal_pair`]s; the last value is unused).
+    ///
+    /// # Errors
+    /// [`MclError::ZeroParticles`], [`MclError::TooManyParticles`], [`MclError::BadInitialPose`]
+    /// (nothing is changed on error).
+    pub fn init_gaussian<R: Rng + ?Sized>(
+        &mut self,
+        count: usize,
+        mean: &Pose,
+        sigma_xy_m: f32,
+        sigma_theta_rad: f32,
+        rng: &mut R,
+    ) -> Result<(), MclError> {
+        Self::check_count(count)?;
+        let ok = |s: f32| s.is_finite() && s >= 0.0;
+        if !(mean.is_finite() && ok(sigma_xy_m) && ok(sigma_theta_rad)) {
+            return Err(MclError::BadInitialPose);
+        }
+        for p in self.store.poses.iter_mut().take(count) {
+            let (a, b) = standard_normal_pair(rng);
+            let (c, _) = standard_normal_pair(rng);
+            *p = Pose {
+                x_m: mean.x_m + sigma_xy_m * a,
+                y_m: mean.y_m + sigma_xy_m * b,
+                theta_rad: wrap_angle(mean.theta_rad + sigma_theta_rad * c),
+            };
+        }
+        self.reset_weights(count);
+        Ok(())
+    }
+
+    /// Initializes `count` particles uniformly over the free cells of `free`, headings uniform
+    /// ([`FreeSpace::sample_pose`], four `next_u32` per particle); equal weights.
+    ///
+    /// # Errors
+    /// [`MclError::ZeroParticles`], [`MclError::TooManyParticles`].
+    pub fn init_uniform<R: Rng + ?Sized>(
+        &mut self,
+        count: usize,
+        free: &FreeSpace<'_>,
+        rng: &mut R,
+    ) -> Result<(), MclError> {
+        Self::check_count(count)?;
+        for p in self.store.poses.iter_mut().take(count) {
+            *p = free.sample_pose(rng);
+        }
+        self.reset_weights(count);
+        Ok(())
+    }
+
+    /// The particles in use.
+    pub fn poses(&self) -> &[Pose] {
+        self.store.poses.get(..self.len).unwrap_or(&[])
+    }
+
+    /// Their weights (summing to 1).
+    pub fn weights(&self) -> &[f32] {
+        self.store.weights.get(..self.len).unwrap_or(&[])
+    }
+
+    /// The number of particles in use (0 before initialization).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True before initialization.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The latest estimate (of the initial set, before any update).
+    pub fn estimate(&self) -> &Estimate {
+        &self.estimate
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &MclConfig {
+        &self.config
+    }
+
+    /// Moves every particle by a sample of the odometry motion model (Table 5.6); four
+    /// `next_u32` per particle, in particle order ([`OdometryNoise::sample`](super::OdometryNoise::sample)). A step of exactly
+    /// zero (the robot did not move) leaves the particles alone and draws nothing, as AMCL does
+    /// not update when the robot stands still.
+    pub fn predict<R: Rng + ?Sized>(&mut self, step: &OdometryStep, rng: &mut R) {
+        if *step == OdometryStep::STILL {
+            return;
+        }
+        let sigmas = self.config.noise.sigmas(step);
+        for p in self.store.poses.iter_mut().take(self.len) {
+            *p = sample_with(p, step, sigmas, rng);
+        }
+    }
+
+    /// Replaces every particle `x` by `f(x)` (heading wrapped), keeping weights and the
+    /// recovery averages: for a map-frame correction, or to simulate a kidnapping in a test.
+    /// A non-finite result leaves that particle where it was. Returns how many moved.
+    pub fn move_particles<F: FnMut(&Pose) -> Pose>(&mut self, mut f: F) -> usize {
+        let mut moved = 0;
+        for p in self.store.poses.iter_mut().take(self.len) {
+            let q = f(p);
+            if q.is_finite() {
+                *p = Pose::new(q.x_m, q.y_m, wrap_angle(q.theta_rad));
+                moved += 1;
+            }
+        }
+        moved
+    }
+
+    /// Reweights by a prepared tempered likelihood-field scan ([`TemperedScan::score`]; the
+    /// fast path) and finishes the update (see [`Mcl::update_with`]).
+    ///
+    /// # Errors
+    /// [`MclError::EmptyScan`] when the prepared scan keeps no beam (skipped, nothing
+    /// changed), and as [`Mcl::update_with`].
+    pub fn update_prepared<R: Rng + ?Sized, const S: usize>(
+        &mut self,
+        scan: &TemperedScan<'_, S>,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        if scan.prepared().is_empty() {
+            return Err(MclError::EmptyScan);
+        }
+        let per_beam = 1.0 / scan.prepared().len() as f32;
+        self.update_scaled(|p| scan.score(p).log_likelihood, per_beam, free, rng)
+    }
+
+    /// Reweights by any [`SensorModel`] (e.g. a [`crate::Tempered`] beam model) and finishes the
+    /// update (see [`Mcl::update_with`]).
+    ///
+    /// # Errors
+    /// [`MclError::EmptyScan`] when the model scores no beam of `scan` at the first particle
+    /// (skipped, nothing changed), and as [`Mcl::update_with`].
+    pub fn update_model<M: SensorModel<S>, R: Rng + ?Sized, const S: usize>(
+        &mut self,
+        model: &M,
+        layout: &BeamLayout<S>,
+        scan: &Scan<S>,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        let first = self
+            .poses()
+            .first()
+            .copied()
+            .ok_or(MclError::NotInitialized)?;
+        if model.score(layout, scan, &first).scored == 0 {
+            return Err(MclError::EmptyScan);
+        }
+        self.update_with(|p| model.score(layout, scan, p).log_likelihood, free, rng)
+    }
+
+    /// Reweights each particle by `ln p(z | xᵢ)` = `log_likelihood(xᵢ)` (nats), computes the
+    /// estimate, and resamples when due, drawing recovery particles from `free`.
+    ///
+    /// A NaN log-likelihood counts as `−∞` (an impossible pose) and `+∞` as `f32::MAX`, so no
+    /// input puts a NaN in the weights.
+    ///
+    /// # Random numbers
+    /// One `next_u32` for the number of random particles; when resampling, one more for
+    /// Table 4.4's offset and four per random particle ([`FreeSpace::sample_pose`]).
+    ///
+    /// # Errors
+    /// [`MclError::NotInitialized`]; [`MclError::AllImpossible`] when every particle scores
+    /// `−∞` (the weights are reset to uniform, the particles and averages kept).
+    pub fn update_with<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
+        &mut self,
+        log_likelihood: F,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        self.update_scaled(log_likelihood, 1.0, free, rng)
+    }
+
+    fn update_scaled<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
+        &mut self,
+        mut log_likelihood: F,
+        recovery_scale: f32,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        let n = self.len;
+        if n == 0 {
+            return Err(MclError::NotInitialized);
+        }
+        let uniform = self.uniform;
+        let ln_uniform = -math::ln(n as f32);
+        let (poses, weights) = (&self.store.poses, &mut self.store.weights);
+        for (p, w) in poses.iter().zip(weights.iter_mut()).take(n) {
+            let l = log_likelihood(p);
+            let l = if l.is_nan() {
+                f32::NEG_INFINITY
+            } else {
+                l.min(f32::MAX)
+            };
+            let prior = if uniform { ln_uniform } else { math::ln(*w) };
+            *w = prior + l;
+        }
+        let normalized =
+            match normalize_log_weights(self.store.weights.get_mut(..n).unwrap_or(&mut [])) {
+                Ok(x) => x,
+                Err(NormalizeError::AllImpossible) | Err(_) => {
+                    self.reset_weights_only();
+                    return Err(MclError::AllImpossible);
+                }
+            };
+        self.uniform = false;
+        // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added above, so the
+        // normalizer's total is the average likelihood itself.
+        let ln_avg = normalized.log_total;
+        let random_fraction = self.track_likelihood(ln_avg * recovery_scale);
+        let best = self
+            .poses()
+            .get(normalized.best)
+            .copied()
+            .unwrap_or_default();
+        self.estimate = Estimate::around(
+            self.poses(),
+            self.weights(),
+            &best,
+            ESTIMATE_RADIUS_M,
+            ESTIMATE_HALF_ANGLE_RAD,
+        );
+        let u = uniform_f32(rng);
+        let m = if free.is_some() {
+            ((n as f32 * random_fraction + u) as usize).min(n)
+        } else {
+            0
+        };
+        let due = normalized.ess < self.config.resample_ess_fraction * n as f32 || m > 0;
+        let mut injected = 0u16;
+        if due {
+            injected = self.resample(m, free, rng);
+        }
+        Ok(Update {
+            estimate: self.estimate,
+            ln_avg_likelihood: ln_avg,
+            random_fraction,
+            resampled: due,
+            injected,
+        })
+    }
+
+    fn reset_weights_only(&mut self) {
+        let w = 1.0 / self.len as f32;
+        self.store
+            .weights
+            .iter_mut()
+            .take(self.len)
+            .for_each(|x| *x = w);
+        self.uniform = true;
+    }
+
+    /// Table 8.3's averages, in log space; returns `max(0, 1 − w_fast/w_slow)`.
+    fn track_likelihood(&mut self, ln_avg: f32) -> f32 {
+        if !self.config.recovery() {
+            return 0.0;
+        }
+        let follow = |ln_w: f32, alpha: f32| {
+            if ln_w == f32::NEG_INFINITY {
+                ln_avg
+            } else {
+                // ln((1 − α)·w + α·w_avg), as a two-term log-sum-exp.
+                let a = math::ln(1.0 - alpha) + ln_w;
+                let b = math::ln(alpha) + ln_avg;
+                let hi = a.max(b);
+                hi + math::ln(math::exp(a - hi) + math::exp(b - hi))
+            }
+        };
+        self.ln_w_slow = follow(self.ln_w_slow, self.config.recovery_alpha_slow);
+        self.ln_w_fast = follow(self.ln_w_fast, self.config.recovery_alpha_fast);
+        let ratio = math::exp(self.ln_w_fast - self.ln_w_slow);
+        if ratio.is_nan() {
+            0.0
+        } else {
+            (1.0 - ratio).max(0.0)
+        }
+    }
+
+    /// Low-variance resampling of `n − m` particles and `m` random ones from `free`, in place.
+    fn resample<R: Rng + ?Sized>(
+        &mut self,
+        m: usize,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> u16 {
+        let n = self.len;
+        let draws = u16::try_from(n - m).unwrap_or(u16::MAX);
+        let store = &mut *self.store;
+        let (weights, counts, poses) = (
+            store.weights.get(..n).unwrap_or(&[]),
+            store.counts.get_mut(..n).unwrap_or(&mut []),
+            store.poses.get_mut(..n).unwrap_or(&mut []),
+        );
+        low_variance_counts(weights, counts, draws, rng);
+        apply_counts(poses, counts);
+        let mut injected = 0u16;
+        if let Some(free) = free {
+            for (p, &c) in poses.iter_mut().zip(counts.iter()) {
+                if c == 0 {
+                    *p = free.sample_pose(rng);
+                    injected = injected.saturating_add(1);
+                }
+            }
+        }
+        self.reset_weights_only();
+        injected
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mcl::{OdometryNoise, SplitMix64};
+
+    fn config() -> MclConfig {
+        MclConfig::new(OdometryNoise::uniform(0.005).unwrap(), 0.5, 0.001, 0.1).unwrap()
+    }
+
+    #[test]
+    fn eighteen_bytes_per_particle() {
+        assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
+        assert!(core::mem::size_of::<Mcl<'_, 1000>>() <= 128);
+    }
+
+    #[test]
+    fn capacity_and_count_errors() {
+        let mut empty = Particles::<0>::new();
+        assert_eq!(
+            Mcl::new(&mut empty, config()).err(),
+            Some(MclError::ZeroParticles)
+        );
+        let mut store = Particles::<8>::new();
+        let mut f = Mcl::new(&mut store, config()).unwrap();
+        let mut rng = SplitMix64::new(1);
+        assert_eq!(
+            f.update_with(|_| 0.0, None, &mut rng).err(),
+            Some(MclError::NotInitialized)
+        );
+        let origin = Pose::default();
+        assert_eq!(
+            f.init_gaussian(0, &origin, 0.1, 0.1, &mut rng),
+            Err(MclError::ZeroParticles)
+        );
+        assert_eq!(
+            f.init_gaussian(9, &origin, 0.1, 0.1, &mut rng),
+            Err(MclError::TooManyParticles)
+        );
+        assert_eq!(
+            f.init_gaussian(8, &Pose::new(f32::NAN, 0.0, 0.0), 0.1, 0.1, &mut rng),
+            Err(MclError::BadInitialPose)
+        );
+        assert!(f.is_empty());
+        assert_eq!(
+            MclConfig::new(OdometryNoise::uniform(0.0).unwrap(), 0.5, 0.2, 0.1).err(),
+            Some(MclError::BadConfig)
+        );
+        assert_eq!(
+            MclConfig::new(OdometryNoise::uniform(0.0).unwrap(), f32::NAN, 0.0, 0.0).err(),
+            Some(MclError::BadConfig)
+        );
+    }
+
+    #[test]
+    fn all_impossible_and_nan_scores() {
+        let mut store = Particles::<16>::new();
+        let mut f = Mcl::new(&mut store, config()).unwrap();
+        let mut rng = SplitMix64::new(2);
+        f.init_gaussian(16, &Pose::new(1.0, 2.0, 0.5), 0.2, 0.1, &mut rng)
+            .unwrap();
+        let before: Vec<Pose> = f.poses().to_vec();
+        assert_eq!(
+            f.update_with(|_| f32::NEG_INFINITY, None, &mut rng).err(),
+            Some(MclError::AllImpossible)
+        );
+        assert_eq!(f.poses(), &before[..]);
+        assert!(f.weights().iter().all(|&w| w == 1.0 / 16.0));
+        // NaN scores are impossible poses; the one finite particle takes all the weight.
+        let keep = before[3];
+        let up = f
+            .update_with(|p| if *p == keep { -5.0 } else { f32::NAN }, None, &mut rng)
+            .unwrap();
+        assert!(up.resampled);
+        assert!(f.poses().iter().all(|p| *p == keep));
+        assert_eq!(up.estimate.pose.x_m, keep.x_m);
+    }
+
+    #[test]
+    fn converges_on_a_synthetic_likelihood() {
+        // ln p = −|x − x*|²/(2·0.05²) − … : the cloud (σ 0.5 m, 0.3 rad) must close on the peak
+        // while the robot drives 0.3 m per step along +x with exact odometry.
+        let mut store = Particles::<500>::new();
+        let mut f = Mcl::new(&mut store, config()).unwrap();
+        let mut rng = SplitMix64::new(3);
+        let mut truth = Pose::new(0.0, 0.0, 0.0);
+        f.init_gaussian(500, &Pose::new(0.3, -0.2, 0.2), 0.5, 0.3, &mut rng)
+            .unwrap();
+        let step = OdometryStep::new(0.0, 0.3, 0.0).unwrap();
+        for _ in 0..30 {
+            truth = step.apply(&truth);
+            f.predict(&step, &mut rng);
+            let t = truth;
+            f.update_with(
+                |p| {
+                    let (dx, dy, dt) = (
+                        p.x_m - t.x_m,
+                        p.y_m - t.y_m,
+                        wrap_angle(p.theta_rad - t.theta_rad),
+                    );
+                    -(dx * dx + dy * dy) / (2.0 * 0.05 * 0.05) - dt * dt / (2.0 * 0.02 * 0.02)
+                },
+                None,
+                &mut rng,
+            )
+            .unwrap();
+            assert!(f.poses().iter().all(Pose::is_finite));
+        }
+        let e = f.estimate().pose;
+        assert!(
+            (e.x_m - truth.x_m).abs() < 0.05 && e.y_m.abs() < 0.05,
+            "{e:?} vs {truth:?}"
+        );
+        assert!(e.theta_rad.abs() < 0.03, "{e:?}");
+    }
+}

@@ -1,0 +1,31 @@
+//! Monte Carlo localization on the device (Thrun, Burgard & Fox ch. 8, on the ch. 6 models):
+//! allocation-free, capacity as a const generic, storage placed by the caller.
+//!
+//! - [`motion`]: the odometry motion model, sampled (Table 5.6), with AMCL's
+//!   `odom_alpha1..4` variance convention.
+//! - [`resample`]: low-variance resampling (Table 4.4) in place, one `u16` per particle.
+//! - [`estimate`]: weighted mean, circular mean heading, covariance, effective sample size.
+//! - [`config`]: [`Particles`] (the caller-placed storage), [`MclConfig`], [`MclError`],
+//!   [`Update`].
+//! - [`filter`]: [`Mcl`] over [`Particles`]: prediction, reweighting by any
+//!   [`SensorModel`](crate::SensorModel) or a prepared tempered scan, resampling when the
+//!   effective sample size drops, augmented-MCL recovery (Table 8.3) from a
+//!   [`FreeSpace`](crate::field::FreeSpace) section, uniform and Gaussian initialization.
+//! - [`rng`]: [`SplitMix64`], a seeded generator the host and the device run identically.
+//!
+//! Memory: 18 bytes per particle of capacity (pose 12, weight 4, resampling count 2) in
+//! [`Particles`], plus a fixed ~80 bytes in [`Mcl`]. See `docs/localization.md` for the
+//! measurements on the Intel lab log.
+
+pub mod config;
+pub mod estimate;
+pub mod filter;
+pub mod motion;
+pub mod resample;
+pub mod rng;
+
+pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES};
+pub use estimate::Estimate;
+pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
+pub use motion::{MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M};
+pub use rng::SplitMix64;

@@ -1,0 +1,380 @@
+//! One run of the localizer over a loaded log, and its metrics.
+
+use crate::carmen::{CarmenLog, ReadOptions};
+use crate::score_cmd::MAX_BEAMS;
+use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
+use beamfield::mcl::{
+    Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64,
+};
+use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, SensorMount, Tempered};
+use std::io::IsTerminal;
+use std::path::Path;
+
+use super::{
+    usage, Init, TrackError, Weighting, CONVERGED_DEG, CONVERGED_M, CONVERGED_SCANS,
+    INIT_SIGMA_THETA_RAD, INIT_SIGMA_XY_M, KIDNAP_MIN_M, KIDNAP_SEED_XOR, LOST_M,
+    MAX_TRACK_PARTICLES, ODOMETRY_SEED_XOR,
+};
+
+/// Everything a run needs, loaded once.
+pub struct TrackInput {
+    /// Blob bytes (and any free-space section after them).
+    pub bytes: Vec<u8>,
+    /// Likelihood-field parameters.
+    pub params: LikelihoodParams,
+    /// The log's beam layout (centred mount).
+    pub layout: BeamLayout<MAX_BEAMS>,
+    /// The scans.
+    pub scans: Vec<Scan<MAX_BEAMS>>,
+    /// The logged (corrected) laser poses: the truth.
+    pub logged: Vec<Pose>,
+}
+
+impl TrackInput {
+    /// The field view and the free space after it, if any.
+    ///
+    /// # Errors
+    /// [`TrackError::Blob`], [`TrackError::FreeSpace`] (also when its grid is not the blob's).
+    pub fn views(&self) -> Result<(FieldView<'_>, Option<FreeSpace<'_>>), TrackError> {
+        let (view, rest) = FieldView::parse_prefix(&self.bytes).map_err(TrackError::Blob)?;
+        if rest.is_empty() {
+            return Ok((view, None));
+        }
+        let free = FreeSpace::parse(rest).map_err(TrackError::FreeSpace)?;
+        if !free.matches(&view) {
+            return Err(usage("the free-space section's grid is not the blob's"));
+        }
+        Ok((view, Some(free)))
+    }
+}
+
+/// Loads the field and the log.
+///
+/// # Errors
+/// [`TrackError`] for unreadable or malformed inputs.
+pub fn load(
+    field: &Path,
+    log: &Path,
+    z_hit: f32,
+    z_rand: f32,
+    sigma_hit: f32,
+) -> Result<TrackInput, TrackError> {
+    let bytes = std::fs::read(field).map_err(|e| TrackError::Io(field.to_path_buf(), e))?;
+    let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
+    let max_range = log
+        .max_range
+        .value_m()
+        .ok_or_else(|| usage("the log's max-range value could not be detected"))?;
+    let params = LikelihoodParams::new(z_hit, z_rand, sigma_hit, max_range)
+        .map_err(|e| usage(format!("likelihood field parameters: {e}")))?;
+    let layout = log
+        .layout_with_mount(SensorMount::CENTERED)
+        .map_err(|e| usage(format!("beam layout of the log: {e}")))?;
+    let scans = log
+        .scans
+        .iter()
+        .map(|s| s.to_scan())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| usage(format!("scan: {e}")))?;
+    if scans.is_empty() {
+        return Err(usage("no FLASER scans in the log"));
+    }
+    let logged = log.scans.iter().map(|s| s.pose).collect();
+    let input = TrackInput {
+        bytes,
+        params,
+        layout,
+        scans,
+        logged,
+    };
+    input.views()?;
+    Ok(input)
+}
+
+/// The options of one run.
+#[derive(Clone, Copy, Debug)]
+pub struct RunOptions {
+    /// Particles.
+    pub particles: usize,
+    /// κ.
+    pub kappa: f32,
+    /// Beam stride.
+    pub stride: usize,
+    /// odom_alpha1..4.
+    pub alphas: [f32; 4],
+    /// Seed.
+    pub seed: u64,
+    /// Initial cloud.
+    pub init: Init,
+    /// Scan at which the robot is kidnapped.
+    pub kidnap: Option<usize>,
+    /// Weighting.
+    pub weighting: Weighting,
+    /// (recovery_alpha_slow, recovery_alpha_fast).
+    pub recovery: (f32, f32),
+    /// ESS fraction below which the set is resampled.
+    pub resample_ess: f32,
+    /// Scans to run (at most the log's).
+    pub scans: usize,
+}
+
+/// The outcome of one run.
+#[derive(Clone, Debug)]
+pub struct RunResult {
+    /// The estimate after each scan.
+    pub estimates: Vec<Pose>,
+    /// Translation error per scan, metres.
+    pub trans_err_m: Vec<f64>,
+    /// Heading error per scan, degrees.
+    pub heading_err_deg: Vec<f64>,
+    /// Scans whose update was skipped (empty scan) or discarded (all particles impossible).
+    pub skipped: usize,
+    /// Resamplings.
+    pub resamplings: usize,
+    /// Random particles injected by recovery, in total.
+    pub injected: u64,
+}
+
+/// Summary figures of a run.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct Metrics {
+    /// Translation RMSE over the scans, metres.
+    pub trans_rmse_m: f64,
+    /// Heading RMSE, degrees.
+    pub heading_rmse_deg: f64,
+    /// Largest translation error, metres.
+    pub max_trans_m: f64,
+    /// Fraction of scans within 10 cm and 2°.
+    pub within_10cm_2deg: f64,
+    /// The estimate was once more than 0.5 m off.
+    pub lost: bool,
+    /// First scan from which the estimate stays within 20 cm / 5° for 20 scans (counted from
+    /// the start, or from the kidnapping).
+    pub converged_after: Option<usize>,
+}
+
+impl RunResult {
+    /// The summary, over scans `from..` (the RMSE and fractions over all scans; convergence
+    /// counted from `from`).
+    pub fn metrics(&self, from: usize) -> Metrics {
+        let n = self.trans_err_m.len().max(1) as f64;
+        let trans_rmse_m = (self.trans_err_m.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+        let heading_rmse_deg = (self.heading_err_deg.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
+        let max_trans_m = self.trans_err_m.iter().copied().fold(0.0, f64::max);
+        let ok: Vec<bool> = self
+            .trans_err_m
+            .iter()
+            .zip(&self.heading_err_deg)
+            .map(|(&t, &h)| t <= 0.10 && h <= 2.0)
+            .collect();
+        let within = ok.iter().filter(|&&b| b).count() as f64 / n;
+        let close: Vec<bool> = self
+            .trans_err_m
+            .iter()
+            .zip(&self.heading_err_deg)
+            .map(|(&t, &h)| t <= CONVERGED_M && h <= CONVERGED_DEG)
+            .collect();
+        let mut converged_after = None;
+        let mut streak = 0usize;
+        for (k, &c) in close.iter().enumerate().skip(from) {
+            streak = if c { streak + 1 } else { 0 };
+            if streak == CONVERGED_SCANS {
+                converged_after = Some(k + 1 - CONVERGED_SCANS - from);
+                break;
+            }
+        }
+        Metrics {
+            trans_rmse_m,
+            heading_rmse_deg,
+            max_trans_m,
+            within_10cm_2deg: within,
+            lost: max_trans_m > LOST_M,
+            converged_after,
+        }
+    }
+}
+
+/// AMCL's `likelihood_field` weight of `scan` at `pose`: `ln(1 + Σ p_k³)`.
+fn amcl_cube(
+    view: &FieldView<'_>,
+    params: &LikelihoodParams,
+    layout: &BeamLayout<MAX_BEAMS>,
+    scan: &Scan<MAX_BEAMS>,
+    stride: usize,
+    pose: &Pose,
+) -> f32 {
+    let (s, c) = (pose.theta_rad.sin(), pose.theta_rad.cos());
+    let denom = 2.0 * params.sigma_hit_m() * params.sigma_hit_m();
+    let rand = params.z_rand() / params.max_range_m();
+    let mut p = 1.0f32;
+    for (beam, &r) in layout.beams().iter().zip(scan.ranges_m()).step_by(stride) {
+        if !matches!(
+            Reading::classify(r, params.max_range_m()),
+            Reading::Range(_)
+        ) {
+            continue;
+        }
+        let (bx, by) = (beam.cos * c - beam.sin * s, beam.sin * c + beam.cos * s);
+        let d = view.distance_m(pose.x_m + r * bx, pose.y_m + r * by);
+        let pz = params.z_hit() * (-d * d / denom).exp() + rand;
+        p += pz * pz * pz;
+    }
+    p.ln()
+}
+
+/// Runs the filter over the log once.
+///
+/// # Errors
+/// [`TrackError::Usage`] for bad options (global initialization or recovery without free
+/// space, too many particles), [`TrackError::Filter`].
+pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackError> {
+    let (view, free) = input.views()?;
+    if o.particles == 0 || o.particles > MAX_TRACK_PARTICLES {
+        return Err(usage(format!(
+            "--particles {}: must be 1 ..= {MAX_TRACK_PARTICLES}",
+            o.particles
+        )));
+    }
+    if (o.init == Init::Global || o.kidnap.is_some()) && free.is_none() {
+        return Err(usage(
+            "--init global and --kidnap need a field built with --free-space",
+        ));
+    }
+    let noise = OdometryNoise::new(o.alphas[0], o.alphas[1], o.alphas[2], o.alphas[3])
+        .map_err(|e| usage(format!("--odom-noise: {e}")))?;
+    let config = MclConfig::new(noise, o.resample_ess, o.recovery.0, o.recovery.1)
+        .map_err(|e| usage(format!("--recovery / --resample-ess: {e}")))?;
+    let lf = LikelihoodField::new(view, input.params);
+    let model = Tempered::new(lf, o.kappa, o.stride)
+        .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;
+    let mut store: Box<Particles<MAX_TRACK_PARTICLES>> = Box::default();
+    let mut mcl = Mcl::new(&mut store, config).map_err(TrackError::Filter)?;
+    let mut rng = SplitMix64::new(o.seed);
+    let mut odom_rng = SplitMix64::new(o.seed ^ ODOMETRY_SEED_XOR);
+    let mut kidnap_rng = SplitMix64::new(o.seed ^ KIDNAP_SEED_XOR);
+    let first = input.logged.first().copied().unwrap_or_default();
+    match (o.init, &free) {
+        (Init::Global, Some(f)) => mcl.init_uniform(o.particles, f, &mut rng),
+        _ => mcl.init_gaussian(
+            o.particles,
+            &first,
+            INIT_SIGMA_XY_M,
+            INIT_SIGMA_THETA_RAD,
+            &mut rng,
+        ),
+    }
+    .map_err(TrackError::Filter)?;
+    let n = o.scans.min(input.scans.len());
+    let mut out = RunResult {
+        estimates: Vec::with_capacity(n),
+        trans_err_m: Vec::with_capacity(n),
+        heading_err_deg: Vec::with_capacity(n),
+        skipped: 0,
+        resamplings: 0,
+        injected: 0,
+    };
+    let progress = std::io::stderr().is_terminal();
+    let mut odom = first;
+    for k in 0..n {
+        let truth = input.logged[k];
+        if k > 0 {
+            let step = OdometryStep::between(&input.logged[k - 1], &truth)
+                .map_err(|e| usage(format!("logged pose {k}: {e}")))?;
+            let next = noise.sample(&odom, &step, &mut odom_rng);
+            let seen = OdometryStep::between(&odom, &next)
+                .map_err(|e| usage(format!("odometry {k}: {e}")))?;
+            odom = next;
+            mcl.predict(&seen, &mut rng);
+        }
+        if o.kidnap == Some(k) {
+            if let Some(f) = &free {
+                kidnap(&mut mcl, f, &truth, &mut kidnap_rng);
+            }
+        }
+        let scan = &input.scans[k];
+        let result = match o.weighting {
+            Weighting::Product => {
+                let prepared = model.prepare(&input.layout, scan);
+                mcl.update_prepared(&prepared, free.as_ref(), &mut rng)
+            }
+            Weighting::AmclCube => {
+                if scan.is_empty() {
+                    Err(MclError::EmptyScan)
+                } else {
+                    mcl.update_with(
+                        |p| amcl_cube(&view, &input.params, &input.layout, scan, o.stride, p),
+                        free.as_ref(),
+                        &mut rng,
+                    )
+                }
+            }
+        };
+        let est = match result {
+            Ok(u) => {
+                out.resamplings += usize::from(u.resampled);
+                out.injected += u64::from(u.injected);
+                u.estimate.pose
+            }
+            Err(MclError::EmptyScan | MclError::AllImpossible) => {
+                out.skipped += 1;
+                mcl.estimate().pose
+            }
+            Err(e) => return Err(TrackError::Filter(e)),
+        };
+        let dx = f64::from(est.x_m - truth.x_m);
+        let dy = f64::from(est.y_m - truth.y_m);
+        out.estimates.push(est);
+        out.trans_err_m.push(dx.hypot(dy));
+        out.heading_err_deg.push(
+            f64::from(wrap_angle(est.theta_rad - truth.theta_rad))
+                .abs()
+                .to_degrees(),
+        );
+        if progress && (k % 50 == 0 || k + 1 == n) {
+            eprint!("\rseed {}: scan {}/{n}", o.seed, k + 1);
+            if k + 1 == n {
+                eprintln!();
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Moves the whole cloud rigidly so that the truth lands on a free pose at least
+/// [`KIDNAP_MIN_M`] away: from the filter's side, the robot was carried off. The weights and
+/// recovery averages are kept (only the poses move).
+fn kidnap<const N: usize>(
+    mcl: &mut Mcl<'_, N>,
+    free: &FreeSpace<'_>,
+    truth: &Pose,
+    kidnap_rng: &mut SplitMix64,
+) {
+    let mut wrong = free.sample_pose(kidnap_rng);
+    for _ in 0..10_000 {
+        if (wrong.x_m - truth.x_m).hypot(wrong.y_m - truth.y_m) >= KIDNAP_MIN_M {
+            break;
+        }
+        wrong = free.sample_pose(kidnap_rng);
+    }
+    // p' = wrong ⊕ (truth⁻¹ ⊕ p), in f64.
+    let (tx, ty, tt) = (
+        f64::from(truth.x_m),
+        f64::from(truth.y_m),
+        f64::from(truth.theta_rad),
+    );
+    let (wx, wy, wt) = (
+        f64::from(wrong.x_m),
+        f64::from(wrong.y_m),
+        f64::from(wrong.theta_rad),
+    );
+    let turn = wt - tt;
+    let (s, c) = turn.sin_cos();
+    mcl.move_particles(|p| {
+        let (dx, dy) = (f64::from(p.x_m) - tx, f64::from(p.y_m) - ty);
+        Pose::new(
+            (wx + c * dx - s * dy) as f32,
+            (wy + s * dx + c * dy) as f32,
+            (f64::from(p.theta_rad) + turn) as f32,
+        )
+    });
+}

@@ -1,0 +1,105 @@
+//! `beamfield track`: help text, typed errors, and a short run on a synthetic room.
+
+mod common;
+
+use beamfield::field::{emit_blob, emit_free_space, free_space_len, FieldHeader, FreeSpaceGrid};
+use common::bin;
+
+#[test]
+fn help_explains_the_command() {
+    let out = bin().args(["track", "--help"]).output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for word in [
+        "--particles",
+        "--kappa",
+        "--odom-noise",
+        "--init",
+        "--kidnap",
+        "--seed",
+    ] {
+        assert!(text.contains(word), "help lacks {word}");
+    }
+}
+
+#[test]
+fn global_init_needs_the_free_space_section() {
+    let dir = std::env::temp_dir().join(format!("bf-track-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // A 40 × 40 room of 10 cm cells (walls on the border) with no free-space section, and a
+    // two-scan CARMEN log whose ranges include the max-range value 20 m.
+    let h = FieldHeader::new(40, 40, 0.1, 0.0, 0.0);
+    let codes: Vec<u8> = (0..1600u32)
+        .map(|i| {
+            let (x, y) = (i % 40, i / 40);
+            let d = x.min(y).min(39 - x).min(39 - y);
+            h.encode_distance_m(f64::from(d) * 0.1)
+        })
+        .collect();
+    let mut blob = vec![0u8; h.required_len().unwrap()];
+    emit_blob(&h, &codes, &mut blob).unwrap();
+    let field = dir.join("room.bin");
+    std::fs::write(&field, &blob).unwrap();
+    let ranges: Vec<String> = (0..180)
+        .map(|i| {
+            if i % 9 == 0 {
+                "20.0".to_string()
+            } else {
+                format!("{:.2}", 1.0 + (i % 7) as f32 * 0.1)
+            }
+        })
+        .collect();
+    let ranges = ranges.join(" ");
+    let log = dir.join("room.log");
+    std::fs::write(
+        &log,
+        format!(
+            "FLASER 180 {ranges} 2.0 2.0 0.0 2.0 2.0 0.0 1.0 host 1.0\n\
+             FLASER 180 {ranges} 2.1 2.0 0.0 2.1 2.0 0.0 2.0 host 2.0\n"
+        ),
+    )
+    .unwrap();
+    let run = |extra: &[&str]| {
+        bin()
+            .args(["track", "--field"])
+            .arg(&field)
+            .arg("--log")
+            .arg(&log)
+            .args(["--particles", "50"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--init", "global"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--free-space"), "{err}");
+    // Tracking from the logged pose needs no free space.
+    let out = run(&["--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["scans"], 2);
+    // With the section appended, global initialization runs.
+    let grid = FreeSpaceGrid::of_view(&beamfield::field::FieldView::parse(&blob).unwrap());
+    let flags: Vec<bool> = (0..1600u32)
+        .map(|i| {
+            let (x, y) = (i % 40, i / 40);
+            x > 0 && y > 0 && x < 39 && y < 39
+        })
+        .collect();
+    let mut fs = vec![0u8; free_space_len(&grid, &flags).unwrap()];
+    emit_free_space(&grid, &flags, &mut fs).unwrap();
+    blob.extend(fs);
+    std::fs::write(&field, &blob).unwrap();
+    let out = run(&["--init", "global"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
