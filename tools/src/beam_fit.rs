@@ -284,7 +284,8 @@ pub fn amcl_pairs(i: &BeamIntrinsics) -> [(&'static str, f32); 7] {
 /// [`FitError`].
 pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
     let bytes = std::fs::read(&args.field).map_err(|e| FitError::Io(args.field.clone(), e))?;
-    let view = FieldView::parse(&bytes).map_err(|e| FitError::Blob(args.field.clone(), e))?;
+    let view = crate::field_cmd::parse_field_file(&bytes)
+        .map_err(|e| FitError::Blob(args.field.clone(), e))?;
     let t_read = Instant::now();
     let log = CarmenLog::read_path(
         &args.log,

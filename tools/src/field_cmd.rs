@@ -267,6 +267,22 @@ pub fn build_free_space(map: &OccupancyMap) -> Result<Vec<u8>, FieldCmdError> {
     Ok(out)
 }
 
+/// Parses a field file as the tool writes it: a blob, optionally followed by its free-space
+/// section (`field build --free-space`, docs/free-space-format.md). Any other trailing bytes are
+/// rejected as [`FieldView::parse`] rejects them.
+///
+/// # Errors
+/// The [`BlobError`] of the blob, or [`BlobError::TrailingBytes`] when what follows the blob is
+/// not a free-space section.
+pub fn parse_field_file(bytes: &[u8]) -> Result<FieldView<'_>, BlobError> {
+    let (view, rest) = FieldView::parse_prefix(bytes)?;
+    if rest.is_empty() || beamfield::field::FreeSpace::parse(rest).is_ok() {
+        Ok(view)
+    } else {
+        FieldView::parse(bytes)
+    }
+}
+
 fn read_blob(path: &Path) -> Result<Vec<u8>, FieldCmdError> {
     std::fs::read(path).map_err(|e| FieldCmdError::Io(path.to_path_buf(), e))
 }
@@ -339,8 +355,7 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
         }
         FieldCommand::Query { blob } => {
             let bytes = read_blob(&blob)?;
-            let (view, _) =
-                FieldView::parse_prefix(&bytes).map_err(|e| FieldCmdError::Blob(blob, e))?;
+            let view = parse_field_file(&bytes).map_err(|e| FieldCmdError::Blob(blob, e))?;
             let stdin = std::io::stdin();
             let report = run_query(
                 &view,
@@ -358,8 +373,8 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
         }
         FieldCommand::Render { blob, output } => {
             let bytes = read_blob(&blob)?;
-            let (view, _) = FieldView::parse_prefix(&bytes)
-                .map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            let view =
+                parse_field_file(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
             let name = blob.file_name().map_or_else(
                 || blob.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),

@@ -65,6 +65,15 @@ fn cell_rgb(view: &FieldView<'_>, ix: u32, iy: u32) -> [u8; 3] {
     [g, g, g]
 }
 
+/// The field as an RGB image, one pixel per cell, north up, in the colours of [`draw_field`]
+/// (without title, axes or key): the background of other pictures, such as `track`'s.
+pub fn field_image(view: &FieldView<'_>) -> image::RgbImage {
+    let h = view.height();
+    image::RgbImage::from_fn(view.width(), h, |x, row| {
+        image::Rgb(cell_rgb(view, x, h - 1 - row))
+    })
+}
+
 /// Draws `view` to the PNG `path` with the title `title`.
 ///
 /// # Errors

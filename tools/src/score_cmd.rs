@@ -8,7 +8,7 @@ use crate::calibrate::{calibrate, Calibration};
 use crate::carmen::{CarmenLog, LogError, ReadOptions};
 use crate::plot::{line_chart, LineChart, Series};
 use crate::pose_grid::{argmax, posterior_sd, score_grid, GridSpec};
-use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
+use beamfield::field::{LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, Pose, Scan, SensorModel, SensorMount, Tempered};
 use clap::Args;
 use std::fmt::Write as _;
@@ -157,7 +157,7 @@ struct Loaded {
 
 fn load(m: &ModelArgs) -> Result<Loaded, ScoreCmdError> {
     let blob = std::fs::read(&m.field).map_err(|e| ScoreCmdError::Io(m.field.clone(), e))?;
-    FieldView::parse(&blob).map_err(ScoreCmdError::Blob)?;
+    crate::field_cmd::parse_field_file(&blob).map_err(ScoreCmdError::Blob)?;
     let options = ReadOptions {
         max_range_m: m.max_range,
         ..ReadOptions::default()
@@ -217,7 +217,7 @@ fn parse_pose(text: &str) -> Result<Pose, ScoreCmdError> {
 pub fn run_score(a: &ScoreArgs, json: bool) -> Result<String, ScoreCmdError> {
     let l = load(&a.model)?;
     let lf = LikelihoodField::new(
-        FieldView::parse(&l.blob).map_err(ScoreCmdError::Blob)?,
+        crate::field_cmd::parse_field_file(&l.blob).map_err(ScoreCmdError::Blob)?,
         l.params,
     );
     let model = Tempered::new(lf, a.kappa, 1).map_err(|e| usage(format!("--kappa: {e}")))?;
@@ -412,7 +412,7 @@ fn write_overlay(
             ),
         },
     ];
-    let view = FieldView::parse(&l.blob).map_err(ScoreCmdError::Blob)?;
+    let view = crate::field_cmd::parse_field_file(&l.blob).map_err(ScoreCmdError::Blob)?;
     crate::overlay::draw_overlay(
         path,
         &view,
@@ -531,7 +531,7 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
     }
     let l = load(&a.model)?;
     let lf = LikelihoodField::new(
-        FieldView::parse(&l.blob).map_err(ScoreCmdError::Blob)?,
+        crate::field_cmd::parse_field_file(&l.blob).map_err(ScoreCmdError::Blob)?,
         l.params,
     );
     let total = l.log.scans.len();

@@ -1,7 +1,7 @@
 //! The track picture: trajectories over the rendered field.
 
 use super::{RunResult, TrackError, TrackInput};
-use crate::field_cmd::render;
+use crate::field_figure::field_image;
 use beamfield::Pose;
 use std::path::Path;
 
@@ -14,7 +14,7 @@ pub(super) fn draw_track(
     scans: usize,
 ) -> Result<(), TrackError> {
     let (view, _) = input.views()?;
-    let base = render(&view);
+    let base = field_image(&view);
     let scale = 1u32;
     let img = image::imageops::resize(
         &base,
