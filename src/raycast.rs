@@ -122,7 +122,8 @@ impl Probe for CastTrace {
 #[derive(Clone, Copy, Debug)]
 pub struct RayCaster<'a> {
     view: FieldView<'a>,
-    /// The payload, row-major (row 0 = lowest y), `stride` codes per row.
+    /// The payload, row-major (row 0 = lowest y), `stride` codes per row; empty for a tiled
+    /// blob, whose cells are read through [`FieldView`] (a miss here falls back to it).
     codes: &'a [u8],
     stride: usize,
     last_ix: u32,
@@ -553,8 +554,14 @@ impl Ray {
             mut left_y,
         } = self.walk;
         loop {
-            let Some(&code) = rc.codes.get(idx) else {
-                return Run::Done(None);
+            // Encoding 1 reads the slice; a miss (past the map, or a tiled blob) asks the view,
+            // which gives `None` past the map in both encodings.
+            let code = match rc.codes.get(idx) {
+                Some(&c) => c,
+                None => match rc.view.code_at_index(idx) {
+                    Some(c) => c,
+                    None => return Run::Done(None),
+                },
             };
             if u16::from(code) >= rc.jump_code {
                 probe.jump();
