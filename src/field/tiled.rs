@@ -220,10 +220,11 @@ pub(crate) fn payload_len_possible(header: &FieldHeader, len: usize) -> bool {
 /// the map never misses (the accessors still return `Option`: no panic path whatever).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TiledCells<'a> {
-    /// `2·TW·TH` bytes: u16 little-endian pool tile numbers.
-    index: &'a [u8],
-    /// `16·P` bytes.
-    pool: &'a [u8],
+    /// The tile index (`2·TW·TH` bytes: u16 little-endian pool tile numbers) followed by the
+    /// pool (`16·P` bytes): one slice, so the per-beam loop keeps one pointer and one length.
+    tables: &'a [u8],
+    /// Offset of the pool in `tables`, bytes (`2·TW·TH`).
+    pool_at: usize,
     /// `TW`, tiles per row.
     tiles_w: u32,
 }
@@ -253,7 +254,7 @@ impl<'a> TiledCells<'a> {
             return Err(BlobError::BadTileTable);
         }
         let rest = payload.get(TILED_PREAMBLE_LEN..).unwrap_or(&[]);
-        let (index, pool) = rest.split_at(tiles * 2);
+        let index = rest.get(..tiles * 2).ok_or(BlobError::Truncated)?;
         if index.chunks_exact(2).any(|p| match p {
             [lo, hi] => u32::from(u16::from_le_bytes([*lo, *hi])) >= pool_tiles,
             _ => true,
@@ -261,8 +262,8 @@ impl<'a> TiledCells<'a> {
             return Err(BlobError::TileIndexOutOfRange);
         }
         Ok(Self {
-            index,
-            pool,
+            tables: rest,
+            pool_at: tiles * 2,
             tiles_w: tw,
         })
     }
@@ -272,16 +273,15 @@ impl<'a> TiledCells<'a> {
     #[inline(always)]
     pub(crate) fn code(&self, ix: u32, iy: u32) -> Option<u8> {
         let t = (iy >> 2) as usize * self.tiles_w as usize + (ix >> 2) as usize;
-        let pair: [u8; 2] = self.index.get(t * 2..t * 2 + 2)?.try_into().ok()?;
+        let pair: [u8; 2] = self.tables.get(t * 2..t * 2 + 2)?.try_into().ok()?;
         let local = ((iy & 3) << 2 | (ix & 3)) as usize;
-        self.pool
-            .get(usize::from(u16::from_le_bytes(pair)) * TILE_CELLS + local)
-            .copied()
+        let tile = usize::from(u16::from_le_bytes(pair)) * TILE_CELLS;
+        self.tables.get(self.pool_at + (tile | local)).copied()
     }
 
     /// Tiles in the pool.
     pub(crate) fn pool_tiles(&self) -> usize {
-        self.pool.len() / TILE_CELLS
+        (self.tables.len() - self.pool_at) / TILE_CELLS
     }
 }
 

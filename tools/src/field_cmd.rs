@@ -53,6 +53,17 @@ enum FieldCommand {
         #[arg(long, value_enum, default_value_t = Encoding::Raw)]
         encoding: Encoding,
     },
+    /// Rewrite a blob in another encoding (same header, same codes, so the same scores).
+    Encode {
+        /// The blob to read (either encoding).
+        blob: PathBuf,
+        /// Where to write the re-encoded blob.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The encoding to write.
+        #[arg(long, value_enum)]
+        encoding: Encoding,
+    },
     /// Describe a blob: grid, encoding, bytes and bytes per cell (and tiles for a tiled blob).
     Info {
         /// The blob.
@@ -203,6 +214,32 @@ pub fn build_blob_encoded(
     }
 }
 
+/// Re-encodes a blob (either encoding) as a raw blob (encoding 1) with the same header and
+/// codes.
+///
+/// # Errors
+/// Any [`BlobError`] of the input.
+pub fn untile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
+    let view = FieldView::parse(blob)?;
+    let header = *view.header();
+    let codes = codes_of(&view);
+    let mut out = vec![0u8; header.required_len()?];
+    beamfield::field::emit_blob(&header, &codes, &mut out)?;
+    Ok(out)
+}
+
+/// Every code of a view, row-major from the lowest y.
+fn codes_of(view: &FieldView<'_>) -> Vec<u8> {
+    if let Some(raw) = view.raw_codes() {
+        return raw.to_vec();
+    }
+    let (w, h) = (view.width(), view.height());
+    (0..h)
+        .flat_map(|iy| (0..w).map(move |ix| (ix, iy)))
+        .map(|(ix, iy)| view.code(ix, iy).unwrap_or(255))
+        .collect()
+}
+
 /// Re-encodes a blob (either encoding) as a tiled blob (encoding 2) with the same header and
 /// codes.
 ///
@@ -211,10 +248,7 @@ pub fn build_blob_encoded(
 pub fn tile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
     let view = FieldView::parse(blob)?;
     let header = *view.header();
-    let codes: Vec<u8> = (0..header.height)
-        .flat_map(|iy| (0..header.width).map(move |ix| (ix, iy)))
-        .map(|(ix, iy)| view.code(ix, iy).unwrap_or(255))
-        .collect();
+    let codes = codes_of(&view);
     let mut scratch = vec![0u32; tiled_scratch_len(&header)?];
     let mut out = vec![0u8; tiled_max_len(&header)?];
     let n = emit_blob_tiled(&header, &codes, &mut scratch, &mut out)?;
@@ -433,6 +467,44 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                     blob.len() as f64 / cells as f64,
                     (t1 - t0).as_secs_f64() * 1e3,
                     (t2 - t1).as_secs_f64() * 1e3,
+                );
+            }
+            Ok(())
+        }
+        FieldCommand::Encode {
+            blob,
+            output,
+            encoding,
+        } => {
+            let bytes = read_blob(&blob)?;
+            let out = match encoding {
+                Encoding::Raw => untile_blob(&bytes),
+                Encoding::Tiled => tile_blob(&bytes),
+            }
+            .map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            std::fs::write(&output, &out).map_err(|e| FieldCmdError::Io(output.clone(), e))?;
+            let info = BlobInfo::of(&out).map_err(|e| FieldCmdError::Blob(output.clone(), e))?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({
+                        "input": blob.display().to_string(),
+                        "output": output.display().to_string(),
+                        "input_bytes": bytes.len(),
+                        "encoding": info.encoding_name(),
+                        "bytes": info.bytes,
+                        "bytes_per_cell": info.bytes_per_cell(),
+                    })
+                );
+            } else {
+                println!(
+                    "{}: {} encoding, {} bytes ({:.4} bytes/cell; {} was {} bytes)",
+                    output.display(),
+                    info.encoding_name(),
+                    info.bytes,
+                    info.bytes_per_cell(),
+                    blob.display(),
+                    bytes.len()
                 );
             }
             Ok(())

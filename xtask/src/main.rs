@@ -26,7 +26,7 @@ const QEMU_TIMEOUT_S: &str = "120";
 const INSNS_BEAMS: u64 = 360;
 /// What each measured region of `insns.rs` does, in order, and what its count is divided by
 /// (the program prints the divisors on its `insns divisors:` line).
-const INSNS_REGIONS: [(&str, &str); 10] = [
+const INSNS_REGIONS: [(&str, &str); 12] = [
     ("empty loop (sum of ranges)", "beam"),
     ("ln per beam (math::ln)", "beam"),
     ("exp per beam (math::exp)", "beam"),
@@ -38,6 +38,9 @@ const INSNS_REGIONS: [(&str, &str); 10] = [
     ("LF per-pose path (score)", "beam"),
     // Issue 4's race: real scans, real map, z* cast on the device.
     ("beam model + ray cast, Intel", "beam"),
+    // The likelihood field over the same map stored tiled (distance encoding 2).
+    ("LF prepared score, tiled blob", "beam"),
+    ("LF prepared, no beams, tiled", "pose"),
 ];
 
 type Result<T = ()> = std::result::Result<T, String>;
@@ -500,6 +503,13 @@ fn insns(machine: &str) -> Result {
         per(8),
         counts[8] as f64 / counts[6] as f64,
         per(5)
+    );
+    println!(
+        "likelihood field, prepared, tiled blob (encoding 2, same codes): {:.1} instructions per beam ({:.1} with the per-pose work), {:.2}x the raw blob's {:.1}",
+        (counts[10] as f64 - counts[11] as f64) / divisors[10] as f64,
+        per(10),
+        (counts[10] as f64 - counts[11] as f64) / (counts[6] as f64 - counts[7] as f64),
+        (counts[6] as f64 - counts[7] as f64) / divisors[6] as f64,
     );
     let (empty, ln, mixture) = (counts[0], counts[1], counts[3]);
     println!(
