@@ -168,6 +168,14 @@ impl<'a> RayCaster<'a> {
         .with_min_jump_cells(JUMP_MIN_CELLS))
     }
 
+    /// A cell past encoding 1's slice: a tiled blob's cell, or `None` past the map. Out of
+    /// line, so the traversal's loop keeps only the raw read.
+    #[inline(never)]
+    #[cold]
+    fn code_slow(&self, idx: usize) -> Option<u8> {
+        self.view.code_at_index(idx)
+    }
+
     /// The same caster, jumping only where the safe jump exceeds `cells` (cell lengths;
     /// default [`JUMP_MIN_CELLS`]). A tuning knob for speed only: every jump is safe, so any
     /// value casts to the same first occupied cell (the entry distance may differ by f32
@@ -558,7 +566,7 @@ impl Ray {
             // which gives `None` past the map in both encodings.
             let code = match rc.codes.get(idx) {
                 Some(&c) => c,
-                None => match rc.view.code_at_index(idx) {
+                None => match rc.code_slow(idx) {
                     Some(c) => c,
                     None => return Run::Done(None),
                 },

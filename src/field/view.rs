@@ -29,6 +29,9 @@ pub(crate) enum Cells<'a> {
 pub struct FieldView<'a> {
     header: FieldHeader,
     cells: Cells<'a>,
+    /// Encoding 1's codes, empty for a tiled blob: the hot paths read this slice and take the
+    /// out-of-line [`FieldView::code_slow`] on a miss, so encoding 1 pays nothing for encoding 2.
+    raw: &'a [u8],
     width_f: f32,
     height_f: f32,
     last_ix: u32,
@@ -78,6 +81,10 @@ impl<'a> FieldView<'a> {
         let view = Self {
             header,
             cells,
+            raw: match cells {
+                Cells::Raw(c) => c,
+                Cells::Tiled(_) => &[],
+            },
             width_f: header.width as f32,
             height_f: header.height as f32,
             last_ix: header.width.saturating_sub(1),
@@ -175,14 +182,22 @@ impl<'a> FieldView<'a> {
     /// cell of a validated view; a broken precondition gives `None`, not a wrong read).
     #[inline(always)]
     pub(crate) fn code_on_map(&self, ix: u32, iy: u32) -> Option<u8> {
+        let i = (iy as usize)
+            .wrapping_mul(self.stride)
+            .wrapping_add(ix as usize);
+        match self.raw.get(i) {
+            Some(&c) => Some(c),
+            None => self.code_slow(ix, iy),
+        }
+    }
+
+    /// [`FieldView::code_on_map`] past encoding 1's slice: a tiled blob's cell (or `None`).
+    /// Out of line, so the raw read stays the hot paths' only code.
+    #[inline(never)]
+    #[cold]
+    fn code_slow(&self, ix: u32, iy: u32) -> Option<u8> {
         match self.cells {
-            Cells::Raw(codes) => codes
-                .get(
-                    (iy as usize)
-                        .wrapping_mul(self.stride)
-                        .wrapping_add(ix as usize),
-                )
-                .copied(),
+            Cells::Raw(_) => None,
             Cells::Tiled(t) => t.code(ix, iy),
         }
     }
@@ -194,6 +209,7 @@ impl<'a> FieldView<'a> {
         match self.cells {
             Cells::Raw(codes) => codes.get(i).copied(),
             Cells::Tiled(t) => {
+                // Out-of-bounds `i` of a raw blob never reaches here (see the raw arm).
                 let iy = i.checked_div(self.stride)?;
                 if iy > self.last_iy as usize {
                     return None;
