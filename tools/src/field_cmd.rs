@@ -52,6 +52,13 @@ enum FieldCommand {
         /// choose `tiled` when the blob must be small (flash), scores are identical.
         #[arg(long, value_enum, default_value_t = Encoding::Raw)]
         encoding: Encoding,
+        /// Another state of the same map (doors open or closed; same size, resolution and
+        /// origin), repeatable. The blob then stores, per cell, the smallest distance over MAP
+        /// and every variant: one transform over the union of their occupied cells (Thrun et
+        /// al., Probabilistic Robotics, chapter 6, exercises). Build one blob per variant to
+        /// tell which one explains a scan (`beamfield score` with each).
+        #[arg(long = "variant", value_name = "MAP.yaml")]
+        variants: Vec<PathBuf>,
     },
     /// Rewrite a blob in another encoding (same header, same codes, so the same scores).
     Encode {
@@ -111,6 +118,8 @@ pub enum FieldCmdError {
     Png(PathBuf, String),
     /// Some query lines were malformed (count).
     BadLines(usize),
+    /// A `--variant` map's size, resolution or origin differs from the map's.
+    VariantMismatch(PathBuf),
 }
 
 impl std::fmt::Display for FieldCmdError {
@@ -124,6 +133,11 @@ impl std::fmt::Display for FieldCmdError {
             Self::Header(e) => write!(f, "map cannot be stored as a blob: {e}"),
             Self::Png(p, e) => write!(f, "{}: {e}", p.display()),
             Self::BadLines(n) => write!(f, "{n} malformed input line(s)"),
+            Self::VariantMismatch(p) => write!(
+                f,
+                "{}: a variant must have the map's size, resolution and origin",
+                p.display()
+            ),
         }
     }
 }
@@ -194,6 +208,35 @@ pub fn build_blob(map: &OccupancyMap, max_dist_m: f32) -> Result<Vec<u8>, FieldC
     let sq = squared_distances(map)?;
     let mut out = vec![0u8; len];
     emit_blob_from_squared_cells(&header, &sq, &mut out).map_err(FieldCmdError::Header)?;
+    Ok(out)
+}
+
+/// The union of `map` and its variants: a cell is occupied when it is occupied in any of them
+/// (otherwise it keeps `map`'s state). Its distance field is, per cell, the minimum of the
+/// maps' fields.
+///
+/// # Errors
+/// [`FieldCmdError::VariantMismatch`] naming the first variant (by its path in `variants`)
+/// whose geometry differs from `map`'s.
+pub fn union_map(
+    map: &OccupancyMap,
+    variants: &[(PathBuf, OccupancyMap)],
+) -> Result<OccupancyMap, FieldCmdError> {
+    let mut out = map.clone();
+    for (path, v) in variants {
+        if (v.width, v.height) != (map.width, map.height)
+            || v.resolution_m != map.resolution_m
+            || v.origin_x_m != map.origin_x_m
+            || v.origin_y_m != map.origin_y_m
+        {
+            return Err(FieldCmdError::VariantMismatch(path.clone()));
+        }
+        for (c, &vc) in out.cells.iter_mut().zip(&v.cells) {
+            if vc == Occupancy::Occupied {
+                *c = Occupancy::Occupied;
+            }
+        }
+    }
     Ok(out)
 }
 
@@ -421,9 +464,15 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             output,
             max_dist,
             encoding,
+            variants,
         } => {
             let t0 = Instant::now();
             let m = load_map(&map).map_err(FieldCmdError::Map)?;
+            let loaded = variants
+                .iter()
+                .map(|p| Ok((p.clone(), load_map(p).map_err(FieldCmdError::Map)?)))
+                .collect::<Result<Vec<_>, FieldCmdError>>()?;
+            let m = union_map(&m, &loaded)?;
             let t1 = Instant::now();
             let blob = build_blob_encoded(&m, max_dist, encoding)?;
             let t2 = Instant::now();
@@ -438,6 +487,7 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                         "resolution_m": m.resolution_m,
                         "origin_m": [m.origin_x_m, m.origin_y_m],
                         "occupied_cells": m.occupied_count(),
+                        "variants": variants.len(),
                         "max_dist_m": max_dist,
                         "encoding": BlobInfo::of(&blob).map(|i| i.encoding_name()).unwrap_or("?"),
                         "bytes": blob.len(),

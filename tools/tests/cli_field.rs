@@ -139,3 +139,22 @@ fn tiled_build_info_encode() {
     assert!(!st.status.success());
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// `--variant` with a map of another size is refused with the variant's path named.
+#[test]
+fn variant_of_another_geometry_is_refused() {
+    let st = bin()
+        .args(["field", "build"])
+        .arg(data_dir().join("map_turtlebot3_world/map.yaml"))
+        .arg("--variant")
+        .arg(data_dir().join("map_willow_garage/willow-full-0.05.yaml"))
+        .args(["-o", "/tmp/beamfield-variant-refused.bin"])
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    let err = String::from_utf8(st.stderr).unwrap();
+    assert!(
+        err.contains("willow-full-0.05.yaml: a variant must have the map's size"),
+        "{err}"
+    );
+}
