@@ -122,7 +122,8 @@ impl Probe for CastTrace {
 #[derive(Clone, Copy, Debug)]
 pub struct RayCaster<'a> {
     view: FieldView<'a>,
-    /// The payload, row-major (row 0 = lowest y), `stride` codes per row.
+    /// The payload, row-major (row 0 = lowest y), `stride` codes per row; empty for a tiled
+    /// blob, whose cells are read through [`FieldView`] (a miss here falls back to it).
     codes: &'a [u8],
     stride: usize,
     last_ix: u32,
@@ -165,6 +166,14 @@ impl<'a> RayCaster<'a> {
             jump_code: jump_code(step_cells, jump_margin_cells, JUMP_MIN_CELLS),
         }
         .with_min_jump_cells(JUMP_MIN_CELLS))
+    }
+
+    /// A cell past encoding 1's slice: a tiled blob's cell, or `None` past the map. Out of
+    /// line, so the traversal's loop keeps only the raw read.
+    #[inline(never)]
+    #[cold]
+    fn code_slow(&self, idx: usize) -> Option<u8> {
+        self.view.code_at_index(idx)
     }
 
     /// The same caster, jumping only where the safe jump exceeds `cells` (cell lengths;
@@ -553,8 +562,14 @@ impl Ray {
             mut left_y,
         } = self.walk;
         loop {
-            let Some(&code) = rc.codes.get(idx) else {
-                return Run::Done(None);
+            // Encoding 1 reads the slice; a miss (past the map, or a tiled blob) asks the view,
+            // which gives `None` past the map in both encodings.
+            let code = match rc.codes.get(idx) {
+                Some(&c) => c,
+                None => match rc.code_slow(idx) {
+                    Some(c) => c,
+                    None => return Run::Done(None),
+                },
             };
             if u16::from(code) >= rc.jump_code {
                 probe.jump();

@@ -2,7 +2,8 @@
 //! transform on a 400 × 400 grid and on the Willow map, and blob bytes per cell.
 //!
 //! Run: `cargo bench -p host-tests --bench field -- --warm-up-time 1 --measurement-time 3`
-//! (`-- exact_edt ...` for the transform alone). Each transform runs next to a baseline of two
+//! (`-- exact_edt ...` for the transform alone, `-- blob_build` for the raw and tiled builds of
+//! the Willow blob). Each transform runs next to a baseline of two
 //! plain passes over the same grid (copy, then sum), so its time is also a ratio to that.
 //! Per-beam figures: criterion's "thrpt" line is in beams per second (elements); ns/beam is its
 //! inverse. The ratio to report is the AMCL-style time over the likelihood-field time, for the
@@ -218,5 +219,25 @@ fn transform(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, likelihood, transform);
+/// Building the Willow Garage blob from the loaded map, raw (transform + encode) and tiled
+/// (the same, then deduplicated 4 × 4 tiles): the ratio to report is tiled over raw.
+/// `-- blob_build` runs these alone.
+fn blob_build(c: &mut Criterion) {
+    use beamfield_tools::field_cmd::{build_blob_encoded, Encoding};
+    let map = load_map(&host_tests::data_dir().join("map_willow_garage/willow-full-0.05.yaml"))
+        .expect("Willow map");
+    let mut g = c.benchmark_group("blob_build");
+    g.sample_size(10);
+    for (name, enc) in [
+        ("willow_raw", Encoding::Raw),
+        ("willow_tiled", Encoding::Tiled),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| build_blob_encoded(black_box(&map), 2.0, enc).expect("blob"))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, likelihood, transform, blob_build);
 criterion_main!(benches);

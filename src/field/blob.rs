@@ -105,6 +105,16 @@ pub enum BlobError {
     BufferTooSmall,
     /// Writer: the number of cells given is not `width · height`.
     CellCountMismatch,
+    /// Tiled writer: the scratch is shorter than
+    /// [`tiled_scratch_len`](super::tiled_scratch_len).
+    ScratchTooSmall,
+    /// Tiled writer: more than 65,536 distinct tiles (write encoding 1 instead).
+    TooManyTiles,
+    /// Tiled blob: the tile side is not 4, reserved bytes are not zero, or the pool size is 0,
+    /// above 65,536, or not the one the payload length implies.
+    BadTileTable,
+    /// Tiled blob: a tile-index entry names no tile of the pool.
+    TileIndexOutOfRange,
 }
 
 impl core::fmt::Display for BlobError {
@@ -127,6 +137,10 @@ impl core::fmt::Display for BlobError {
             Self::TrailingBytes => f.write_str("trailing bytes after the payload"),
             Self::BufferTooSmall => f.write_str("output buffer too small"),
             Self::CellCountMismatch => f.write_str("cell count is not width times height"),
+            Self::ScratchTooSmall => f.write_str("scratch buffer too small"),
+            Self::TooManyTiles => f.write_str("more than 65536 distinct tiles"),
+            Self::BadTileTable => f.write_str("inconsistent tile table"),
+            Self::TileIndexOutOfRange => f.write_str("tile index entry outside the tile pool"),
         }
     }
 }
@@ -233,7 +247,13 @@ impl FieldHeader {
         self.encode_distance_m(d_m)
     }
 
-    fn write_fields(&self, head: &mut [u8; BLOB_HEADER_LEN], payload_len: u32, payload_crc: u32) {
+    pub(crate) fn write_fields(
+        &self,
+        head: &mut [u8; BLOB_HEADER_LEN],
+        encoding: u8,
+        payload_len: u32,
+        payload_crc: u32,
+    ) {
         fn put(head: &mut [u8; BLOB_HEADER_LEN], at: usize, bytes: &[u8]) {
             for (d, s) in head.iter_mut().skip(at).zip(bytes) {
                 *d = *s;
@@ -248,7 +268,7 @@ impl FieldHeader {
         put(head, 20, &self.origin_x_m.to_le_bytes());
         put(head, 24, &self.origin_y_m.to_le_bytes());
         put(head, 28, &self.max_dist_m.to_le_bytes());
-        put(head, 32, &[ENCODING_U8_LINEAR, 0, 0, 0]);
+        put(head, 32, &[encoding, 0, 0, 0]);
         put(head, 36, &payload_len.to_le_bytes());
         put(head, 40, &payload_crc.to_le_bytes());
         let crc = CRC32.checksum(head.get(..44).unwrap_or(&[]));
@@ -304,14 +324,24 @@ fn emit_with(
     fill(payload);
     let payload_crc = CRC32.checksum(payload);
     let mut h = [0u8; BLOB_HEADER_LEN];
-    header.write_fields(&mut h, payload_len, payload_crc);
+    header.write_fields(&mut h, ENCODING_U8_LINEAR, payload_len, payload_crc);
     head.copy_from_slice(&h);
     Ok(total)
 }
 
-/// Reads and checks a header; returns it with the payload (exactly `width · height` bytes) and
-/// whatever follows the payload.
-pub(crate) fn parse_blob(bytes: &[u8]) -> Result<(FieldHeader, &[u8], &[u8]), BlobError> {
+/// A blob whose header and checksums passed: see [`parse_blob`].
+pub(crate) struct ParsedBlob<'a> {
+    pub(crate) header: FieldHeader,
+    pub(crate) encoding: u8,
+    pub(crate) payload: &'a [u8],
+    pub(crate) trailing: &'a [u8],
+}
+
+/// Reads and checks a header; returns it with the distance encoding, the payload (exactly
+/// `width · height` bytes for encoding 1, the header's payload length for encoding 2) and
+/// whatever follows the payload. The structure of a tiled payload is checked by
+/// [`TiledCells::parse`](super::tiled::TiledCells::parse).
+pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
     let head: &[u8; BLOB_HEADER_LEN] = bytes
         .get(..BLOB_HEADER_LEN)
         .and_then(|h| h.try_into().ok())
@@ -340,7 +370,7 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<(FieldHeader, &[u8], &[u8]), Bl
         return Err(BlobError::HeaderChecksum);
     }
     let encoding = byte(head, 32);
-    if encoding != ENCODING_U8_LINEAR {
+    if encoding != ENCODING_U8_LINEAR && encoding != super::tiled::ENCODING_TILED {
         return Err(BlobError::UnsupportedEncoding(encoding));
     }
     if byte(head, 33) != 0 || byte(head, 34) != 0 || byte(head, 35) != 0 {
@@ -355,18 +385,29 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<(FieldHeader, &[u8], &[u8]), Bl
         max_dist_m: f32_at(28),
     };
     let cells = header.validate()?;
-    if usize::try_from(u32_at(36)).ok() != Some(cells) {
+    let stated = usize::try_from(u32_at(36)).map_err(|_| BlobError::PayloadLengthMismatch)?;
+    let possible = if encoding == ENCODING_U8_LINEAR {
+        stated == cells
+    } else {
+        super::tiled::payload_len_possible(&header, stated)
+    };
+    if !possible {
         return Err(BlobError::PayloadLengthMismatch);
     }
     let rest = bytes.get(BLOB_HEADER_LEN..).unwrap_or(&[]);
-    if rest.len() < cells {
+    if rest.len() < stated {
         return Err(BlobError::Truncated);
     }
-    let (payload, trailing) = rest.split_at(cells);
+    let (payload, trailing) = rest.split_at(stated);
     if CRC32.checksum(payload) != u32_at(40) {
         return Err(BlobError::PayloadChecksum);
     }
-    Ok((header, payload, trailing))
+    Ok(ParsedBlob {
+        header,
+        encoding,
+        payload,
+        trailing,
+    })
 }
 
 fn byte(head: &[u8; BLOB_HEADER_LEN], at: usize) -> u8 {
@@ -406,7 +447,7 @@ mod tests {
             (|b| b[4] = 2, BlobError::UnsupportedVersion(2)),
             (|b| b[6] = 47, BlobError::BadHeaderLength),
             (|b| b[9] ^= 1, BlobError::HeaderChecksum),
-            (|b| b[32] = 2, BlobError::UnsupportedEncoding(2)),
+            (|b| b[32] = 3, BlobError::UnsupportedEncoding(3)),
             (|b| b[34] = 1, BlobError::ReservedNonZero),
             (|b| b[8..12].fill(0), BlobError::ZeroSize),
             (

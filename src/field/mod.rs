@@ -5,6 +5,8 @@
 //!   caller-provided buffers.
 //! - [`blob`]: the versioned blob format; the writer ([`emit_blob`]) and the parser live
 //!   together and round-trip. Specified in `docs/blob-format.md`.
+//! - [`tiled`]: distance encoding 2, the same codes in deduplicated 4 × 4 tiles (a blob a
+//!   quarter to a half the size, read in O(1)); [`emit_blob_tiled`] writes it.
 //! - [`view`]: [`FieldView`], a validated zero-copy view of a blob, with infallible lookups.
 //! - [`likelihood`]: [`LikelihoodField`], the likelihood field model scored over a view.
 //! - [`free_space`]: [`FreeSpace`], the known-free cells packed for uniform sampling (a section
@@ -20,6 +22,7 @@ pub mod edt;
 pub mod free_space;
 pub mod likelihood;
 pub mod prepared;
+pub mod tiled;
 pub mod view;
 
 pub use blob::{
@@ -35,4 +38,8 @@ pub use likelihood::{
     LikelihoodError, LikelihoodField, LikelihoodParam, LikelihoodParams, LIKELIHOOD_TABLE_LEN,
 };
 pub use prepared::PreparedScan;
+pub use tiled::{
+    emit_blob_tiled, tiled_max_len, tiled_scratch_len, ENCODING_TILED, TILED_MAX_POOL_TILES,
+    TILE_SIDE,
+};
 pub use view::FieldView;

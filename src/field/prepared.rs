@@ -40,6 +40,8 @@
 //! NaN) is scored by a per-beam `f32` path with the same result semantics.
 
 use super::likelihood::{LikelihoodField, LIKELIHOOD_TABLE_LEN};
+use super::tiled::TiledCells;
+use super::view::Cells;
 use crate::math;
 use crate::model::Stride;
 use crate::pose::Pose;
@@ -151,7 +153,7 @@ impl<'a> LikelihoodField<'a> {
         let reach = i64::from(reach);
         let fixed_limit = (1i64 << (31 - frac_bits)) - 2 * reach - 4;
         let w = view.width();
-        let room = u32::try_from(view.codes().len())
+        let room = u32::try_from(view.cell_count())
             .ok()
             .map(|len| u32::MAX - len)
             .and_then(|room| room.checked_div(w));
@@ -241,13 +243,36 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
         f: u32,
         each: &mut E,
     ) -> f32 {
+        // One loop per encoding, chosen once per pose: no dispatch per beam.
+        match self.field.view().cells() {
+            Cells::Raw(codes) => self.fixed_path_over::<_, E, FIX16>(codes, ax, ay, c, s, f, each),
+            Cells::Tiled(tiles) => {
+                self.fixed_path_over::<_, E, FIX16>(tiles, ax, ay, c, s, f, each)
+            }
+        }
+    }
+
+    /// [`PreparedScan::fixed_path`] over one encoding's cells.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn fixed_path_over<C: CellRead, E: FnMut(usize, f32), const FIX16: bool>(
+        &self,
+        cells: C,
+        ax: f32,
+        ay: f32,
+        c: i32,
+        s: i32,
+        f: u32,
+        each: &mut E,
+    ) -> f32 {
         let view = self.field.view();
         let step = view.step_m();
         let scale = pow2(f as i32);
         let k = FixedPose {
-            codes: view.codes(),
+            cells,
             table: self.field.table(),
             w: view.width(),
+            h: view.height(),
             ax: round_to_i32(ax * scale),
             ay: round_to_i32(ay * scale),
             #[cfg(not(target_arch = "arm"))]
@@ -264,7 +289,7 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
         let mut rest = points;
         loop {
             let (partial, stop) =
-                on_map_run::<E, FIX16>(&k, rest, n - rest.len(), sum, f, step, each);
+                on_map_run::<C, E, FIX16>(&k, rest, n - rest.len(), sum, f, step, each);
             sum = partial;
             let Some((p, tail)) = stop.split_first() else {
                 return sum;
@@ -326,14 +351,50 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
     }
 }
 
+/// One encoding's cells as the fixed-point loop reads them.
+trait CellRead: Copy {
+    /// The code of cell `(ix, iy)` of a `w × h` map, `None` off the map (`ix`, `iy` are the
+    /// floored grid coordinates as `u32`: negatives wrap to large values).
+    fn read(&self, ix: u32, iy: u32, w: u32, h: u32) -> Option<u8>;
+}
+
+impl CellRead for &[u8] {
+    /// Encoding 1: one byte read.
+    #[inline(always)]
+    fn read(&self, ix: u32, iy: u32, w: u32, _h: u32) -> Option<u8> {
+        // Row-major index in u32 arithmetic: rows off the map (either side) land past the
+        // payload's end, as the y limits guarantee; columns are checked here.
+        let i = iy.wrapping_mul(w).wrapping_add(ix) as usize;
+        if ix < w {
+            self.get(i).copied()
+        } else {
+            None
+        }
+    }
+}
+
+impl CellRead for TiledCells<'_> {
+    /// Encoding 2: both coordinates checked, then the tile index and the pool.
+    #[inline(always)]
+    fn read(&self, ix: u32, iy: u32, w: u32, h: u32) -> Option<u8> {
+        if (ix < w) & (iy < h) {
+            self.code(ix, iy)
+        } else {
+            None
+        }
+    }
+}
+
 /// What the fixed-point loop reads at one pose.
-struct FixedPose<'a> {
-    /// The map's distance codes, row-major.
-    codes: &'a [u8],
+struct FixedPose<'a, C> {
+    /// The map's distance codes.
+    cells: C,
     /// The per-code log-likelihood terms.
     table: &'a [f32; LIKELIHOOD_TABLE_LEN],
     /// The map's width, cells.
     w: u32,
+    /// The map's height, cells.
+    h: u32,
     /// The robot's grid position, cells, with `f` fractional bits.
     ax: i32,
     ay: i32,
@@ -348,7 +409,7 @@ struct FixedPose<'a> {
     ns: i32,
 }
 
-impl FixedPose<'_> {
+impl<C: CellRead> FixedPose<'_, C> {
     /// The grid point (cells, `f` fractional bits) of a robot-frame endpoint (`f + 2`
     /// fractional bits): rotation and translation as four "multiply, keep the high word, add
     /// or subtract" operations. The limits of the fast path keep these sums in range.
@@ -388,14 +449,7 @@ impl FixedPose<'_> {
         // Arithmetic shift: floor, so a point just left of or below the map gets −1.
         let ix = gx.wrapping_shr(shift) as u32;
         let iy = gy.wrapping_shr(shift) as u32;
-        // Row-major index in u32 arithmetic: rows off the map (either side) land past the
-        // payload's end, as the y limits guarantee; columns are checked here.
-        let i = iy.wrapping_mul(self.w).wrapping_add(ix) as usize;
-        if ix < self.w {
-            self.codes.get(i).copied()
-        } else {
-            None
-        }
+        self.cells.read(ix, iy, self.w, self.h)
     }
 
     /// The table's term for `code` (a code is ≤ 255 and the table has 256 entries: the check
@@ -414,8 +468,8 @@ impl FixedPose<'_> {
 /// is its own. The position of an endpoint is found from its address when needed (on exit, or
 /// for a non-trivial `each`), so the loop keeps no counter.
 #[inline(never)]
-fn on_map_run<'p, E: FnMut(usize, f32), const FIX16: bool>(
-    k: &FixedPose<'_>,
+fn on_map_run<'p, C: CellRead, E: FnMut(usize, f32), const FIX16: bool>(
+    k: &FixedPose<'_, C>,
     points: &'p [[i32; 2]],
     first: usize,
     mut sum: f32,

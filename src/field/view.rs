@@ -1,11 +1,23 @@
 //! [`FieldView`]: a validated, zero-copy view of a distance-field blob (in flash or anywhere).
 
-use super::blob::{parse_blob, BlobError, FieldHeader, CODE_MAX};
+use super::blob::{parse_blob, BlobError, FieldHeader, CODE_MAX, ENCODING_U8_LINEAR};
+use super::tiled::{TiledCells, ENCODING_TILED};
+
+/// Where a view's codes live: one byte per cell (encoding 1) or deduplicated tiles
+/// (encoding 2). Both are validated at parse; the per-cell read is O(1) in each.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Cells<'a> {
+    /// Encoding 1: `width · height` codes, row-major.
+    Raw(&'a [u8]),
+    /// Encoding 2: a tile index and a tile pool.
+    Tiled(TiledCells<'a>),
+}
 
 /// A parsed distance-field blob: validated once, then every lookup is infallible.
 ///
 /// It borrows the blob's bytes (any alignment, e.g. an `include_bytes!` in flash) and copies
-/// nothing. Reading a cell is an index computation and one byte load.
+/// nothing. Reading a cell is an index computation and one byte load (encoding 1), or two
+/// loads through the tile index (encoding 2, tiled); [`FieldView::encoding`] says which.
 ///
 /// # Coordinates
 /// Map frame, metres. Cell `(ix, iy)` covers `[origin_x + ix·s, origin_x + (ix+1)·s) ×
@@ -16,7 +28,10 @@ use super::blob::{parse_blob, BlobError, FieldHeader, CODE_MAX};
 #[derive(Clone, Copy, Debug)]
 pub struct FieldView<'a> {
     header: FieldHeader,
-    codes: &'a [u8],
+    cells: Cells<'a>,
+    /// Encoding 1's codes, empty for a tiled blob: the hot paths read this slice and take the
+    /// out-of-line [`FieldView::code_slow`] on a miss, so encoding 1 pays nothing for encoding 2.
+    raw: &'a [u8],
     width_f: f32,
     height_f: f32,
     last_ix: u32,
@@ -49,12 +64,27 @@ impl<'a> FieldView<'a> {
     /// # Errors
     /// As [`FieldView::parse`], without [`BlobError::TrailingBytes`].
     pub fn parse_prefix(bytes: &'a [u8]) -> Result<(Self, &'a [u8]), BlobError> {
-        let (header, codes, rest) = parse_blob(bytes)?;
+        let parsed = parse_blob(bytes)?;
+        let (header, encoding, payload, rest) = (
+            parsed.header,
+            parsed.encoding,
+            parsed.payload,
+            parsed.trailing,
+        );
+        let cells = if encoding == ENCODING_TILED {
+            Cells::Tiled(TiledCells::parse(&header, payload)?)
+        } else {
+            Cells::Raw(payload)
+        };
         let stride = usize::try_from(header.width).map_err(|_| BlobError::TooLarge)?;
         let step_m = header.step_m();
         let view = Self {
             header,
-            codes,
+            cells,
+            raw: match cells {
+                Cells::Raw(c) => c,
+                Cells::Tiled(_) => &[],
+            },
             width_f: header.width as f32,
             height_f: header.height as f32,
             last_ix: header.width.saturating_sub(1),
@@ -98,9 +128,46 @@ impl<'a> FieldView<'a> {
         self.step_m
     }
 
-    /// The payload: one code per cell, row-major, row 0 = lowest y.
+    /// The payload of an encoding-1 blob: one code per cell, row-major, row 0 = lowest y.
+    /// **Empty for a tiled blob** (encoding 2), which stores no such array: read cells with
+    /// [`FieldView::code`] (either encoding) or use [`FieldView::raw_codes`].
     pub fn codes(&self) -> &'a [u8] {
-        self.codes
+        self.raw_codes().unwrap_or(&[])
+    }
+
+    /// The one-byte-per-cell payload when the blob has encoding 1, `None` for a tiled blob.
+    pub fn raw_codes(&self) -> Option<&'a [u8]> {
+        match self.cells {
+            Cells::Raw(c) => Some(c),
+            Cells::Tiled(_) => None,
+        }
+    }
+
+    /// The blob's distance encoding: [`ENCODING_U8_LINEAR`] (1) or
+    /// [`ENCODING_TILED`] (2). Both give the same codes.
+    pub fn encoding(&self) -> u8 {
+        match self.cells {
+            Cells::Raw(_) => ENCODING_U8_LINEAR,
+            Cells::Tiled(_) => ENCODING_TILED,
+        }
+    }
+
+    /// Tiles in the pool of a tiled blob (`None` for encoding 1).
+    pub fn pool_tiles(&self) -> Option<usize> {
+        match self.cells {
+            Cells::Raw(_) => None,
+            Cells::Tiled(t) => Some(t.pool_tiles()),
+        }
+    }
+
+    /// Where the codes live (for the per-encoding hot loops).
+    pub(crate) fn cells(&self) -> Cells<'a> {
+        self.cells
+    }
+
+    /// `width · height`.
+    pub(crate) fn cell_count(&self) -> usize {
+        self.stride * (self.last_iy as usize + 1)
     }
 
     /// The code of cell `(ix, iy)`, or `None` off the grid.
@@ -108,10 +175,48 @@ impl<'a> FieldView<'a> {
         if ix > self.last_ix || iy > self.last_iy {
             return None;
         }
+        self.code_on_map(ix, iy)
+    }
+
+    /// The code of cell `(ix, iy)` known to be on the map (`None` never happens for such a
+    /// cell of a validated view; a broken precondition gives `None`, not a wrong read).
+    #[inline(always)]
+    pub(crate) fn code_on_map(&self, ix: u32, iy: u32) -> Option<u8> {
         let i = (iy as usize)
-            .checked_mul(self.stride)?
-            .checked_add(ix as usize)?;
-        self.codes.get(i).copied()
+            .wrapping_mul(self.stride)
+            .wrapping_add(ix as usize);
+        match self.raw.get(i) {
+            Some(&c) => Some(c),
+            None => self.code_slow(ix, iy),
+        }
+    }
+
+    /// [`FieldView::code_on_map`] past encoding 1's slice: a tiled blob's cell (or `None`).
+    /// Out of line, so the raw read stays the hot paths' only code.
+    #[inline(never)]
+    #[cold]
+    fn code_slow(&self, ix: u32, iy: u32) -> Option<u8> {
+        match self.cells {
+            Cells::Raw(_) => None,
+            Cells::Tiled(t) => t.code(ix, iy),
+        }
+    }
+
+    /// The code at row-major index `i = iy·width + ix` (`None` past the last cell). O(1) in
+    /// both encodings (a division for a tiled blob).
+    #[inline(always)]
+    pub(crate) fn code_at_index(&self, i: usize) -> Option<u8> {
+        match self.cells {
+            Cells::Raw(codes) => codes.get(i).copied(),
+            Cells::Tiled(t) => {
+                // Out-of-bounds `i` of a raw blob never reaches here (see the raw arm).
+                let iy = i.checked_div(self.stride)?;
+                if iy > self.last_iy as usize {
+                    return None;
+                }
+                t.code((i - iy * self.stride) as u32, iy as u32)
+            }
+        }
     }
 
     /// Map-frame metres to continuous grid coordinates (cell units, `0` at the origin).
@@ -134,13 +239,9 @@ impl<'a> FieldView<'a> {
         let cy = gy.max(0.0).min(self.height_f);
         let ex = gx - cx;
         let ey = gy - cy;
-        let ix = (cx as u32).min(self.last_ix) as usize;
-        let iy = (cy as u32).min(self.last_iy) as usize;
-        let code = self
-            .codes
-            .get(iy * self.stride + ix)
-            .copied()
-            .unwrap_or(CODE_MAX);
+        let ix = (cx as u32).min(self.last_ix);
+        let iy = (cy as u32).min(self.last_iy);
+        let code = self.code_on_map(ix, iy).unwrap_or(CODE_MAX);
         (code, ex * ex + ey * ey)
     }
 
@@ -161,8 +262,7 @@ impl<'a> FieldView<'a> {
             & ((ix as u32) < self.header.width)
             & ((iy as u32) < self.header.height);
         if on {
-            let i = iy as usize * self.stride + ix as usize;
-            self.codes.get(i).copied().unwrap_or(CODE_MAX)
+            self.code_on_map(ix as u32, iy as u32).unwrap_or(CODE_MAX)
         } else {
             self.off_map_index(gx, gy)
         }

@@ -276,7 +276,6 @@ pub struct FixedField<'a> {
     height_q8: i32,
     last_ix: i32,
     last_iy: i32,
-    stride: usize,
     /// Code steps per cell, Q.8 (< 2¹⁶).
     steps_per_cell_q8: u32,
     max_range_m: f32,
@@ -329,7 +328,6 @@ impl<'a> FixedField<'a> {
             height_q8: (h as i32) << 8,
             last_ix: (w as i32).saturating_sub(1),
             last_iy: (h as i32).saturating_sub(1),
-            stride: w as usize,
             steps_per_cell_q8: libm_round_u(spc * 256.0),
             max_range_m,
             max_range_mm,
@@ -485,14 +483,9 @@ impl<'a> FixedField<'a> {
         // `max`/`min`, not `clamp`: clamp asserts its bounds (a panic path).
         let cx = gx.max(0).min(self.width_q8);
         let cy = gy.max(0).min(self.height_q8);
-        let ix = (cx >> 8).min(self.last_ix) as usize;
-        let iy = (cy >> 8).min(self.last_iy) as usize;
-        let code = self
-            .view
-            .codes()
-            .get(iy.wrapping_mul(self.stride).wrapping_add(ix))
-            .copied()
-            .unwrap_or(CODE_MAX);
+        let ix = (cx >> 8).min(self.last_ix) as u32;
+        let iy = (cy >> 8).min(self.last_iy) as u32;
+        let code = self.view.code_on_map(ix, iy).unwrap_or(CODE_MAX);
         let (ex, ey) = (gx.wrapping_sub(cx), gy.wrapping_sub(cy));
         let extra = if (ex | ey) == 0 {
             0

@@ -1,9 +1,10 @@
-//! Writes the demo firmware's assets (`firmware/assets/intel.bin`, `firmware/assets/scans.rs`)
-//! from the Intel lab log. Run by `cargo xtask demo-assets`.
+//! Writes the demo firmware's assets (`firmware/assets/intel.bin`, the same field tiled as
+//! `firmware/assets/intel-tiled.bin`, `firmware/assets/scans.rs`) from the Intel lab log. Run by `cargo xtask demo-assets`.
 //!
 //! Usage: `demo_assets LOG OUT_DIR`.
 
 use beamfield_tools::demo_assets::generate;
+use beamfield_tools::field_cmd::tile_blob;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -31,6 +32,8 @@ fn main() -> ExitCode {
     if let Err(e) = std::fs::create_dir_all(out)
         .map_err(|e| format!("{}: {e}", out.display()))
         .and_then(|()| write("intel.bin", &assets.blob))
+        .and_then(|()| tile_blob(&assets.blob).map_err(|e| format!("tiling the blob: {e}")))
+        .and_then(|tiled| write("intel-tiled.bin", &tiled))
         .and_then(|()| write("scans.rs", assets.scans_rs.as_bytes()))
     {
         eprintln!("demo_assets: {e}");

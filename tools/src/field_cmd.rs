@@ -2,11 +2,12 @@
 
 use crate::map::{load_map, MapError, Occupancy, OccupancyMap};
 use beamfield::field::{
-    edt_scratch_len, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError, EdtScratch,
-    FieldHeader, FieldView, DEFAULT_MAX_DIST_M, EDT_INFINITY,
+    edt_scratch_len, emit_blob_from_squared_cells, emit_blob_tiled, squared_edt, tiled_max_len,
+    tiled_scratch_len, BlobError, EdtError, EdtScratch, FieldHeader, FieldView, DEFAULT_MAX_DIST_M,
+    EDT_INFINITY, ENCODING_TILED,
 };
 use beamfield::field::{emit_free_space, free_space_len, FreeSpaceError, FreeSpaceGrid};
-use clap::{Args, Subcommand};
+use clap::{Args, Subcommand, ValueEnum};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -18,13 +19,25 @@ pub struct FieldArgs {
     command: FieldCommand,
 }
 
+/// How `field build` stores the codes (both give the same codes, so the same scores).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Encoding {
+    /// Encoding 1: one byte per cell (every reader of the format reads it).
+    Raw,
+    /// Encoding 2: deduplicated 4 × 4 tiles, 0.28–0.48 bytes per cell on the shared maps;
+    /// needs a reader that knows encoding 2.
+    Tiled,
+}
+
 #[derive(Subcommand, Debug)]
 enum FieldCommand {
     /// Build a blob from a ROS map_server map (YAML + PGM/PNG).
     ///
     /// Occupied cells seed an exact
-    /// Euclidean distance transform; distances are stored as one byte per cell, in steps of
-    /// d_max/255 and clamped at d_max. The format is described in docs/blob-format.md.
+    /// Euclidean distance transform; distances are coded as one byte per cell, in steps of
+    /// d_max/255 and clamped at d_max, and stored raw (default) or in deduplicated tiles
+    /// (--encoding tiled: the same codes, a quarter to a half of the bytes). The format is
+    /// described in docs/blob-format.md.
     Build {
         /// The map's YAML file (map_server format: image, resolution, origin, negate,
         /// occupied_thresh, free_thresh).
@@ -39,6 +52,34 @@ enum FieldCommand {
         /// uniform particle sampling; docs/free-space-format.md) right after the blob.
         #[arg(long = "free-space")]
         free_space: bool,
+        /// How the codes are stored. `raw` is the default because every reader (older
+        /// firmware, other languages' parsers) reads it and its lookup is the cheapest;
+        /// choose `tiled` when the blob must be small (flash), scores are identical.
+        #[arg(long, value_enum, default_value_t = Encoding::Raw)]
+        encoding: Encoding,
+        /// Another state of the same map (doors open or closed; same size, resolution and
+        /// origin), repeatable. The blob then stores, per cell, the smallest distance over MAP
+        /// and every variant: one transform over the union of their occupied cells (Thrun et
+        /// al., Probabilistic Robotics, chapter 6, exercises). Build one blob per variant to
+        /// tell which one explains a scan (`beamfield score` with each).
+        #[arg(long = "variant", value_name = "MAP.yaml")]
+        variants: Vec<PathBuf>,
+    },
+    /// Rewrite a blob in another encoding (same header, same codes, so the same scores).
+    Encode {
+        /// The blob to read (either encoding).
+        blob: PathBuf,
+        /// Where to write the re-encoded blob.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The encoding to write.
+        #[arg(long, value_enum)]
+        encoding: Encoding,
+    },
+    /// Describe a blob: grid, encoding, bytes and bytes per cell (and tiles for a tiled blob).
+    Info {
+        /// The blob.
+        blob: PathBuf,
     },
     /// Look up distances: "x,y" lines on stdin, "x,y,distance_m" on stdout.
     ///
@@ -85,6 +126,8 @@ pub enum FieldCmdError {
     BadLines(usize),
     /// The free-space section could not be built (e.g. the map has no free cell).
     FreeSpace(FreeSpaceError),
+    /// A `--variant` map's size, resolution or origin differs from the map's.
+    VariantMismatch(PathBuf),
 }
 
 impl std::fmt::Display for FieldCmdError {
@@ -99,6 +142,11 @@ impl std::fmt::Display for FieldCmdError {
             Self::Png(p, e) => write!(f, "{}: {e}", p.display()),
             Self::BadLines(n) => write!(f, "{n} malformed input line(s)"),
             Self::FreeSpace(e) => write!(f, "free-space section: {e}"),
+            Self::VariantMismatch(p) => write!(
+                f,
+                "{}: a variant must have the map's size, resolution and origin",
+                p.display()
+            ),
         }
     }
 }
@@ -170,6 +218,146 @@ pub fn build_blob(map: &OccupancyMap, max_dist_m: f32) -> Result<Vec<u8>, FieldC
     let mut out = vec![0u8; len];
     emit_blob_from_squared_cells(&header, &sq, &mut out).map_err(FieldCmdError::Header)?;
     Ok(out)
+}
+
+/// The union of `map` and its variants: a cell is occupied when it is occupied in any of them
+/// (otherwise it keeps `map`'s state). Its distance field is, per cell, the minimum of the
+/// maps' fields.
+///
+/// # Errors
+/// [`FieldCmdError::VariantMismatch`] naming the first variant (by its path in `variants`)
+/// whose geometry differs from `map`'s.
+pub fn union_map(
+    map: &OccupancyMap,
+    variants: &[(PathBuf, OccupancyMap)],
+) -> Result<OccupancyMap, FieldCmdError> {
+    let mut out = map.clone();
+    for (path, v) in variants {
+        if (v.width, v.height) != (map.width, map.height)
+            || v.resolution_m != map.resolution_m
+            || v.origin_x_m != map.origin_x_m
+            || v.origin_y_m != map.origin_y_m
+        {
+            return Err(FieldCmdError::VariantMismatch(path.clone()));
+        }
+        for (c, &vc) in out.cells.iter_mut().zip(&v.cells) {
+            if vc == Occupancy::Occupied {
+                *c = Occupancy::Occupied;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Builds a blob for a loaded map in the given encoding.
+///
+/// # Errors
+/// As [`build_blob`]; [`FieldCmdError::Header`] with [`BlobError::TooManyTiles`] when the map
+/// has more distinct tiles than encoding 2 holds.
+pub fn build_blob_encoded(
+    map: &OccupancyMap,
+    max_dist_m: f32,
+    encoding: Encoding,
+) -> Result<Vec<u8>, FieldCmdError> {
+    let raw = build_blob(map, max_dist_m)?;
+    match encoding {
+        Encoding::Raw => Ok(raw),
+        Encoding::Tiled => tile_blob(&raw).map_err(FieldCmdError::Header),
+    }
+}
+
+/// Re-encodes a blob (either encoding) as a raw blob (encoding 1) with the same header and
+/// codes.
+///
+/// # Errors
+/// Any [`BlobError`] of the input.
+pub fn untile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
+    let view = parse_field_file(blob)?;
+    let header = *view.header();
+    let codes = codes_of(&view);
+    let mut out = vec![0u8; header.required_len()?];
+    beamfield::field::emit_blob(&header, &codes, &mut out)?;
+    Ok(out)
+}
+
+/// Every code of a view, row-major from the lowest y.
+fn codes_of(view: &FieldView<'_>) -> Vec<u8> {
+    if let Some(raw) = view.raw_codes() {
+        return raw.to_vec();
+    }
+    let (w, h) = (view.width(), view.height());
+    (0..h)
+        .flat_map(|iy| (0..w).map(move |ix| (ix, iy)))
+        .map(|(ix, iy)| view.code(ix, iy).unwrap_or(255))
+        .collect()
+}
+
+/// Re-encodes a blob (either encoding) as a tiled blob (encoding 2) with the same header and
+/// codes.
+///
+/// # Errors
+/// Any [`BlobError`] of the input, [`BlobError::TooManyTiles`].
+pub fn tile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
+    let view = parse_field_file(blob)?;
+    let header = *view.header();
+    let codes = codes_of(&view);
+    let mut scratch = vec![0u32; tiled_scratch_len(&header)?];
+    let mut out = vec![0u8; tiled_max_len(&header)?];
+    let n = emit_blob_tiled(&header, &codes, &mut scratch, &mut out)?;
+    out.truncate(n);
+    Ok(out)
+}
+
+/// What `field info` reports about a blob.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlobInfo {
+    /// The header.
+    pub header: FieldHeader,
+    /// Distance encoding (1 raw, 2 tiled).
+    pub encoding: u8,
+    /// Blob length, bytes (without a free-space section that follows it).
+    pub bytes: usize,
+    /// Length of the free-space section after the blob, bytes (0 without one).
+    pub free_space_bytes: usize,
+    /// Tiles in the pool (tiled blobs only).
+    pub pool_tiles: Option<usize>,
+}
+
+impl BlobInfo {
+    /// Parses `blob` and summarizes it.
+    ///
+    /// # Errors
+    /// Any [`BlobError`].
+    pub fn of(blob: &[u8]) -> Result<Self, BlobError> {
+        let view = parse_field_file(blob)?;
+        let (_, rest) = FieldView::parse_prefix(blob)?;
+        Ok(Self {
+            header: *view.header(),
+            encoding: view.encoding(),
+            bytes: blob.len() - rest.len(),
+            free_space_bytes: rest.len(),
+            pool_tiles: view.pool_tiles(),
+        })
+    }
+
+    /// Cells of the grid.
+    pub fn cells(&self) -> u64 {
+        u64::from(self.header.width) * u64::from(self.header.height)
+    }
+
+    /// Bytes per cell, header included.
+    pub fn bytes_per_cell(&self) -> f64 {
+        self.bytes as f64 / self.cells() as f64
+    }
+
+    /// The encoding's name as `--encoding` spells it.
+    pub fn encoding_name(&self) -> &'static str {
+        if self.encoding == ENCODING_TILED {
+            "tiled"
+        } else {
+            "raw"
+        }
+    }
 }
 
 /// What `field query` did.
@@ -298,11 +486,18 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             output,
             max_dist,
             free_space,
+            encoding,
+            variants,
         } => {
             let t0 = Instant::now();
             let m = load_map(&map).map_err(FieldCmdError::Map)?;
+            let loaded = variants
+                .iter()
+                .map(|p| Ok((p.clone(), load_map(p).map_err(FieldCmdError::Map)?)))
+                .collect::<Result<Vec<_>, FieldCmdError>>()?;
+            let m = union_map(&m, &loaded)?;
             let t1 = Instant::now();
-            let mut blob = build_blob(&m, max_dist)?;
+            let mut blob = build_blob_encoded(&m, max_dist, encoding)?;
             let blob_len = blob.len();
             if free_space {
                 blob.extend(build_free_space(&m)?);
@@ -319,7 +514,9 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                         "resolution_m": m.resolution_m,
                         "origin_m": [m.origin_x_m, m.origin_y_m],
                         "occupied_cells": m.occupied_count(),
+                        "variants": variants.len(),
                         "max_dist_m": max_dist,
+                        "encoding": BlobInfo::of(&blob[..blob_len]).map(|i| i.encoding_name()).unwrap_or("?"),
                         "bytes": blob.len(),
                         "free_space_bytes": blob.len() - blob_len,
                         "bytes_per_cell": blob_len as f64 / cells as f64,
@@ -330,7 +527,8 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             } else {
                 println!(
                     "{}: {} × {} cells of {} m, origin ({}, {}), {} occupied, d_max {} m \
-                     (step {:.4} m); {} bytes ({:.4} bytes/cell){}; load {:.1} ms, transform+encode {:.1} ms",
+                     (step {:.4} m); {} encoding, {} bytes ({:.4} bytes/cell){}; load {:.1} ms, \
+                     transform+encode {:.1} ms",
                     output.display(),
                     m.width,
                     m.height,
@@ -340,6 +538,9 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                     m.occupied_count(),
                     max_dist,
                     max_dist / 255.0,
+                    BlobInfo::of(&blob[..blob_len])
+                        .map(|i| i.encoding_name())
+                        .unwrap_or("?"),
                     blob_len,
                     blob_len as f64 / cells as f64,
                     if free_space {
@@ -349,6 +550,101 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                     },
                     (t1 - t0).as_secs_f64() * 1e3,
                     (t2 - t1).as_secs_f64() * 1e3,
+                );
+            }
+            Ok(())
+        }
+        FieldCommand::Encode {
+            blob,
+            output,
+            encoding,
+        } => {
+            let bytes = read_blob(&blob)?;
+            let mut out = match encoding {
+                Encoding::Raw => untile_blob(&bytes),
+                Encoding::Tiled => tile_blob(&bytes),
+            }
+            .map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            // A free-space section after the blob is carried over unchanged.
+            let (_, rest) = FieldView::parse_prefix(&bytes)
+                .map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            out.extend_from_slice(rest);
+            std::fs::write(&output, &out).map_err(|e| FieldCmdError::Io(output.clone(), e))?;
+            let info = BlobInfo::of(&out).map_err(|e| FieldCmdError::Blob(output.clone(), e))?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({
+                        "input": blob.display().to_string(),
+                        "output": output.display().to_string(),
+                        "input_bytes": bytes.len(),
+                        "encoding": info.encoding_name(),
+                        "bytes": info.bytes,
+                        "bytes_per_cell": info.bytes_per_cell(),
+                    })
+                );
+            } else {
+                println!(
+                    "{}: {} encoding, {} bytes ({:.4} bytes/cell; {} was {} bytes)",
+                    output.display(),
+                    info.encoding_name(),
+                    info.bytes,
+                    info.bytes_per_cell(),
+                    blob.display(),
+                    bytes.len()
+                );
+            }
+            Ok(())
+        }
+        FieldCommand::Info { blob } => {
+            let bytes = read_blob(&blob)?;
+            let info = BlobInfo::of(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            let h = info.header;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::json!({
+                        "blob": blob.display().to_string(),
+                        "width": h.width, "height": h.height,
+                        "cell_size_m": h.cell_size_m,
+                        "origin_m": [h.origin_x_m, h.origin_y_m],
+                        "max_dist_m": h.max_dist_m,
+                        "encoding": info.encoding_name(),
+                        "bytes": info.bytes,
+                        "free_space_bytes": info.free_space_bytes,
+                        "cells": info.cells(),
+                        "bytes_per_cell": info.bytes_per_cell(),
+                        "pool_tiles": info.pool_tiles,
+                    })
+                );
+            } else {
+                let tiles = info
+                    .pool_tiles
+                    .map(|p| format!(", {p} distinct tiles"))
+                    .unwrap_or_default();
+                let free = if info.free_space_bytes > 0 {
+                    format!(
+                        "; then a free-space section of {} bytes",
+                        info.free_space_bytes
+                    )
+                } else {
+                    String::new()
+                };
+                println!(
+                    "{}: {} × {} cells of {} m, origin ({}, {}), d_max {} m; {} encoding{}; \
+                     {} bytes, {:.4} bytes/cell{}",
+                    blob.display(),
+                    h.width,
+                    h.height,
+                    h.cell_size_m,
+                    h.origin_x_m,
+                    h.origin_y_m,
+                    h.max_dist_m,
+                    info.encoding_name(),
+                    tiles,
+                    info.bytes,
+                    info.bytes_per_cell(),
+                    free,
                 );
             }
             Ok(())

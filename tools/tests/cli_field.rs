@@ -105,3 +105,80 @@ fn missing_map_is_a_clear_error() {
     let err = String::from_utf8(st.stderr).unwrap();
     assert!(err.contains("cannot read /nonexistent/map.yaml"), "{err}");
 }
+
+/// `--encoding tiled`, `field info` and `field encode`: the tiled TurtleBot3 blob has the size
+/// the format gives for its 1,452 distinct tiles (48 + 8 + 2·96·96 + 16·1,452 bytes), answers
+/// queries as the raw one does, and encodes back to the raw blob byte for byte.
+#[test]
+fn tiled_build_info_encode() {
+    let out = std::env::temp_dir().join(format!("beamfield-cli-tiled-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let map = data_dir().join("map_turtlebot3_world/map.yaml");
+    let (raw, tiled, back) = (
+        out.join("raw.bin"),
+        out.join("tiled.bin"),
+        out.join("back.bin"),
+    );
+    for (path, enc) in [(&raw, "raw"), (&tiled, "tiled")] {
+        let r = run_json(
+            bin()
+                .args(["--json", "field", "build", "--encoding", enc])
+                .arg(&map)
+                .arg("-o")
+                .arg(path),
+        );
+        assert_eq!(r["encoding"], enc);
+    }
+    let info = run_json(bin().args(["--json", "field", "info"]).arg(&tiled));
+    assert_eq!(info["encoding"], "tiled");
+    assert_eq!(info["pool_tiles"], 1452);
+    assert_eq!(info["bytes"], 48 + 8 + 2 * 96 * 96 + 16 * 1452);
+    let raw_info = run_json(bin().args(["--json", "field", "info"]).arg(&raw));
+    assert_eq!(raw_info["encoding"], "raw");
+    assert_eq!(
+        raw_info["bytes_per_cell"],
+        (48.0 + 384.0 * 384.0) / (384.0 * 384.0)
+    );
+    let r = run_json(
+        bin()
+            .args(["--json", "field", "encode", "--encoding", "raw"])
+            .arg(&tiled)
+            .arg("-o")
+            .arg(&back),
+    );
+    assert_eq!(r["encoding"], "raw");
+    assert_eq!(std::fs::read(&back).unwrap(), std::fs::read(&raw).unwrap());
+    let st = bin()
+        .args([
+            "field",
+            "encode",
+            "--encoding",
+            "tiled",
+            "/nonexistent.bin",
+            "-o",
+        ])
+        .arg(out.join("x.bin"))
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// `--variant` with a map of another size is refused with the variant's path named.
+#[test]
+fn variant_of_another_geometry_is_refused() {
+    let st = bin()
+        .args(["field", "build"])
+        .arg(data_dir().join("map_turtlebot3_world/map.yaml"))
+        .arg("--variant")
+        .arg(data_dir().join("map_willow_garage/willow-full-0.05.yaml"))
+        .args(["-o", "/tmp/beamfield-variant-refused.bin"])
+        .output()
+        .unwrap();
+    assert!(!st.status.success());
+    let err = String::from_utf8(st.stderr).unwrap();
+    assert!(
+        err.contains("willow-full-0.05.yaml: a variant must have the map's size"),
+        "{err}"
+    );
+}

@@ -18,13 +18,13 @@ pub enum Board {
 }
 
 impl Board {
-    fn machine(self) -> &'static str {
+    pub(crate) fn machine(self) -> &'static str {
         match self {
             Board::Mps2An386 => "mps2-an386",
             Board::Netduinoplus2 => "netduinoplus2",
         }
     }
-    fn memory_x(self) -> PathBuf {
+    pub(crate) fn memory_x(self) -> PathBuf {
         repo_root().join(match self {
             Board::Mps2An386 => "memory.x",
             Board::Netduinoplus2 => "memory-stm32f405.x",

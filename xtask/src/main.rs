@@ -4,6 +4,7 @@
 mod budgets;
 mod demo;
 mod demo_ref;
+mod willow;
 
 use clap::{Parser, Subcommand};
 use std::collections::BTreeMap;
@@ -26,7 +27,7 @@ const QEMU_TIMEOUT_S: &str = "120";
 const INSNS_BEAMS: u64 = 360;
 /// What each measured region of `insns.rs` does, in order, and what its count is divided by
 /// (the program prints the divisors on its `insns divisors:` line).
-const INSNS_REGIONS: [(&str, &str); 10] = [
+const INSNS_REGIONS: [(&str, &str); 12] = [
     ("empty loop (sum of ranges)", "beam"),
     ("ln per beam (math::ln)", "beam"),
     ("exp per beam (math::exp)", "beam"),
@@ -38,6 +39,9 @@ const INSNS_REGIONS: [(&str, &str); 10] = [
     ("LF per-pose path (score)", "beam"),
     // The race (docs/race.md): real scans, real map, z* cast on the device.
     ("beam model + ray cast, Intel", "beam"),
+    // The likelihood field over the same map stored tiled (distance encoding 2).
+    ("LF prepared score, tiled blob", "beam"),
+    ("LF prepared, no beams, tiled", "pose"),
 ];
 
 type Result<T = ()> = std::result::Result<T, String>;
@@ -98,6 +102,10 @@ enum Task {
         #[arg(long, value_enum, default_value = "mps2-an386")]
         board: demo::Board,
     },
+    /// The Willow Garage map (1.10 MB raw, more than an STM32F405's flash) linked tiled with the
+    /// STM32F405 layout, run on QEMU's netduinoplus2: a scan cast through it and scored at 125
+    /// poses, every score compared bit for bit with the host's.
+    Willow,
     /// Budgets of the scoring core against the demo's targets, as a table: .text/.rodata/.bss
     /// (size_core minus size_skeleton), stack high-water marks (painted stack), instructions
     /// per pose and per beam (QEMU counting plugin), no heap, fits the STM32F405 layout.
@@ -150,6 +158,7 @@ fn main() -> ExitCode {
         Task::Insns { machine } => insns(&machine),
         Task::Cross => cross(),
         Task::Demo { board } => demo::demo(board),
+        Task::Willow => willow::willow(),
         Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
         Task::DemoAssets => demo::demo_assets(),
@@ -500,6 +509,13 @@ fn insns(machine: &str) -> Result {
         per(8),
         counts[8] as f64 / counts[6] as f64,
         per(5)
+    );
+    println!(
+        "likelihood field, prepared, tiled blob (encoding 2, same codes): {:.1} instructions per beam ({:.1} with the per-pose work), {:.2}x the raw blob's {:.1}",
+        (counts[10] as f64 - counts[11] as f64) / divisors[10] as f64,
+        per(10),
+        (counts[10] as f64 - counts[11] as f64) / (counts[6] as f64 - counts[7] as f64),
+        (counts[6] as f64 - counts[7] as f64) / divisors[6] as f64,
     );
     let (empty, ln, mixture) = (counts[0], counts[1], counts[3]);
     println!(

@@ -21,6 +21,14 @@
 //!    blob, scoring the 8 real scans (1,440 beams) at their logged poses, with the intrinsics EM
 //!    fitted on that log (constants in the module [`intel`]).
 //!
+//!
+//! Then the same likelihood field over the same map stored tiled (distance encoding 2,
+//! `assets/intel-tiled.bin`: the same codes in deduplicated 4 × 4 tiles), same scans, same poses:
+//! 10. `PreparedScan::score` at every pose, tiled blob (per kept beam, per-pose work included);
+//! 11. `PreparedScan::score` of the scan with no kept beam, tiled blob (per pose);
+//!     so `(10 − 11) / beams` is the per-beam cost on the tiled blob, beside `(6 − 7) / beams`.
+//!     The sum must equal region 6's bit for bit (the encoding is lossless).
+//!
 //! The last line printed gives each region's divisor (`insns divisors: …`), which
 //! `cargo xtask insns` reads.
 #![no_std]
@@ -58,6 +66,8 @@ mod real {
 
 /// The 5 cm distance field of the Intel map, as the demo links it.
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
+/// The same field, tiled (distance encoding 2), for regions 10–11.
+static BLOB_TILED: &[u8] = include_bytes!("../../assets/intel-tiled.bin");
 /// Poses per real scan in regions 4–8.
 const POSES_PER_SCAN: usize = 32;
 /// Real scans in regions 4–8.
@@ -154,6 +164,42 @@ fn beam_model_with_ray_casting() -> Option<(f32, usize)> {
     }
     bench_mark_end();
     Some((sum, scored))
+}
+
+/// Regions 10 and 11: [`PreparedScan::score`] over the tiled blob at the same poses as region 6,
+/// then the no-beam scan at the same poses. Returns both sums, or `None` if the blob is
+/// rejected. Not inlined, to keep its code apart from `main`'s regions.
+#[inline(never)]
+fn tiled_regions(
+    layout: &BeamLayout<{ real::BEAMS }>,
+    scans: &[Scan<{ real::BEAMS }>; REAL_SCANS],
+    poses: &[[Pose; POSES_PER_SCAN]; REAL_SCANS],
+    params: LikelihoodParams,
+) -> Option<(f32, f32)> {
+    let field = LikelihoodField::new(FieldView::parse(BLOB_TILED).ok()?, params);
+    let no_return = Scan::<{ real::BEAMS }>::from_ranges(&[f32::INFINITY; real::BEAMS]).ok()?;
+    let empty_prep = field.prepare(layout, &no_return);
+    let prepared: [PreparedScan<'_, { real::BEAMS }>; REAL_SCANS] =
+        core::array::from_fn(|i| field.prepare(layout, black_box(&scans[i % REAL_SCANS])));
+
+    bench_mark_start();
+    let mut sum = 0.0f32;
+    for (prep, ps) in prepared.iter().zip(poses) {
+        for p in ps {
+            sum += prep.score(black_box(p)).log_likelihood;
+        }
+    }
+    bench_mark_end();
+
+    bench_mark_start();
+    let mut overhead = 0.0f32;
+    for ps in poses {
+        for p in ps {
+            overhead += empty_prep.score(black_box(p)).log_likelihood;
+        }
+    }
+    bench_mark_end();
+    Some((sum, overhead))
 }
 
 #[entry]
@@ -335,10 +381,24 @@ fn main() -> ! {
         race_scored
     );
     let race_ok = race_ll.is_finite() && race_scored == real::SCANS.len() * real::BEAMS;
+    // Regions 10–11: the prepared path over the tiled blob, same scans and poses.
+    let Some((tiled_sum, tiled_overhead)) = tiled_regions(&layout, &scans, &poses, params) else {
+        println!("insns: tiled blob rejected");
+        exit(false)
+    };
+    let tiled_ok = tiled_sum.to_bits() == lf_sum.to_bits() && tiled_overhead == 0.0;
+    println!(
+        "insns: regions 10-11 tiled blob ({} bytes, raw {}): prepared sum {} ({}), empty-scan sum {}",
+        BLOB_TILED.len(),
+        BLOB.len(),
+        Fixed::new(f64::from(tiled_sum), 3),
+        if tiled_ok { "bit for bit the raw blob's" } else { "DIFFERS from the raw blob's" },
+        Fixed::new(f64::from(tiled_overhead), 1)
+    );
     // Divisors of each region for `cargo xtask insns`: beams, beam slots, beam evaluations,
     // poses.
     println!(
-        "insns divisors: {} {} {} {} {} {} {} {} {} {}",
+        "insns divisors: {} {} {} {} {} {} {} {} {} {} {} {}",
         BEAMS,
         BEAMS,
         BEAMS,
@@ -348,13 +408,16 @@ fn main() -> ! {
         evaluations,
         REAL_SCANS * POSES_PER_SCAN,
         evaluations,
-        real::SCANS.len() * real::BEAMS
+        real::SCANS.len() * real::BEAMS,
+        evaluations,
+        REAL_SCANS * POSES_PER_SCAN
     );
     exit(
         score.log_likelihood.is_finite()
             && usize::from(score.scored) == BEAMS
             && fixed_point_poses == REAL_SCANS * POSES_PER_SCAN
             && overhead_sum == 0.0
-            && race_ok,
+            && race_ok
+            && tiled_ok,
     )
 }

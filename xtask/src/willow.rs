@@ -1,0 +1,113 @@
+//! `cargo xtask willow`: a map that does not fit the STM32F405 raw, linked tiled. Builds
+//! `firmware/src/bin/willow.rs` with the STM32F405 layout (`memory-stm32f405.x`: an image
+//! that does not fit 1 MiB of flash is a link error), runs it on QEMU's `netduinoplus2`, and
+//! compares every score it prints with the host's run of the same plan
+//! (`firmware/src/willow_plan.rs`) on the same blob, bit for bit.
+
+#[path = "../../firmware/src/willow_plan.rs"]
+#[allow(dead_code)]
+mod willow_plan;
+
+use super::demo::Board;
+use super::{capture, ensure_qemu, ensure_target, repo_root, run_to_files, show, Result};
+use super::{cargo, FIRMWARE_TARGET, QEMU_TIMEOUT_S};
+use std::path::PathBuf;
+use std::process::Command;
+
+/// STM32F405 flash, bytes.
+const FLASH_BYTES: u64 = 1 << 20;
+
+/// Builds and runs the program, then checks its scores against the host's.
+pub fn willow() -> Result {
+    ensure_qemu()?;
+    ensure_target(FIRMWARE_TARGET)?;
+    let board = Board::Netduinoplus2;
+    let mut cmd = cargo();
+    cmd.current_dir(repo_root().join("firmware"))
+        .env("BEAMFIELD_MEMORY_X", board.memory_x())
+        .args([
+            "build",
+            "--release",
+            "--target",
+            FIRMWARE_TARGET,
+            "--bin",
+            "willow",
+            "--message-format=json-render-diagnostics",
+        ]);
+    eprintln!("+ (cd firmware && {})", show(&cmd));
+    let out = capture(&mut cmd)?;
+    let elf = out
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|m| m["reason"] == "compiler-artifact" && m["target"]["name"] == "willow")
+        .find_map(|m| m["executable"].as_str().map(PathBuf::from))
+        .ok_or("cargo built no `willow` executable")?;
+    let blob_path = repo_root().join("firmware/assets/willow-tiled.bin");
+    let blob = std::fs::read(&blob_path).map_err(|e| format!("{}: {e}", blob_path.display()))?;
+    let view = beamfield::FieldView::parse(&blob).map_err(|e| format!("willow blob: {e}"))?;
+    let raw_len = 48 + u64::from(view.width()) * u64::from(view.height());
+    println!(
+        "Willow Garage field: raw would be {raw_len} bytes ({} the STM32F405's {FLASH_BYTES} bytes of flash); tiled {} bytes",
+        if raw_len > FLASH_BYTES { "more than" } else { "within" },
+        blob.len()
+    );
+    let (code, out, err) = run_to_files(
+        Command::new("timeout")
+            .args([
+                QEMU_TIMEOUT_S,
+                "qemu-system-arm",
+                "-machine",
+                board.machine(),
+            ])
+            .args([
+                "-nographic",
+                "-semihosting-config",
+                "enable=on,target=native",
+            ])
+            .args(["-icount", "shift=0", "-kernel"])
+            .arg(&elf),
+        "willow",
+    )?;
+    print!("{out}");
+    eprint!("{err}");
+    if code != 0 {
+        return Err(format!("the willow program exited {code} under QEMU"));
+    }
+    let mut host = [0.0f32; willow_plan::POSES];
+    willow_plan::run(&blob, &mut host).map_err(|e| format!("host run: {e:?}"))?;
+    let mut device = Vec::new();
+    for line in out.lines() {
+        if let Some(rest) = line.strip_prefix("score ") {
+            let (i, hex) = rest
+                .split_once(": ")
+                .ok_or_else(|| format!("bad line {line:?}"))?;
+            let i: usize = i.parse().map_err(|e| format!("{line:?}: {e}"))?;
+            let bits = u32::from_str_radix(hex.trim(), 16).map_err(|e| format!("{line:?}: {e}"))?;
+            device.push((i, bits));
+        }
+    }
+    if device.len() != willow_plan::POSES {
+        return Err(format!(
+            "the device printed {} scores, expected {}",
+            device.len(),
+            willow_plan::POSES
+        ));
+    }
+    for (i, bits) in device {
+        let h = host
+            .get(i)
+            .ok_or_else(|| format!("score index {i} out of range"))?;
+        if h.to_bits() != bits {
+            return Err(format!(
+                "pose {i}: device {} ({bits:08x}), host {h} ({:08x})",
+                f32::from_bits(bits),
+                h.to_bits()
+            ));
+        }
+    }
+    println!(
+        "host reference: all {} scores equal the device's bit for bit",
+        willow_plan::POSES
+    );
+    Ok(())
+}
