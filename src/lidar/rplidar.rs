@@ -487,6 +487,9 @@ pub struct RplidarDecoder {
     info: Option<DeviceInfo>,
     health: Option<Health>,
     revolutions_flagged: u32,
+    /// A scan descriptor was seen (or the decoder was built scanning): a failed descriptor is
+    /// node data.
+    scanning: bool,
 }
 
 impl Default for RplidarDecoder {
@@ -516,6 +519,7 @@ impl RplidarDecoder {
             info: None,
             health: None,
             revolutions_flagged: 0,
+            scanning: false,
         }
     }
 
@@ -524,6 +528,7 @@ impl RplidarDecoder {
     pub const fn scanning() -> Self {
         let mut d = Self::new();
         d.state = State::Nodes;
+        d.scanning = true;
         d
     }
 
@@ -541,65 +546,87 @@ impl RplidarDecoder {
             *slot = byte;
             self.len += 1;
         }
-        match self.state {
-            State::Descriptor => self.descriptor_byte(),
-            State::Payload(n) => {
-                if self.len == usize::from(n) {
+        // Each pass consumes bytes, or waits for more, or moves to a state that will.
+        loop {
+            match self.state {
+                State::Descriptor => {
+                    if !self.descriptor() {
+                        break;
+                    }
+                }
+                State::Payload(n) => {
+                    if self.len < usize::from(n) {
+                        break;
+                    }
                     self.response_bytes = self.response_bytes.saturating_add(u32::from(n));
-                    let p = self.buf.get(..self.len).unwrap_or(&[]);
+                    let p = self.buf.get(..usize::from(n)).unwrap_or(&[]);
                     if usize::from(n) == INFO_LEN {
                         self.info = DeviceInfo::parse(p).ok();
                     } else {
                         self.health = Health::parse(p).ok();
                     }
                     bump(&mut self.stats.frames_ok);
-                    self.len = 0;
+                    self.consume(usize::from(n));
                     self.state = State::Descriptor;
                 }
-            }
-            State::Nodes => {
-                if self.len == NODE_LEN {
+                State::Nodes => {
+                    if self.len < NODE_LEN {
+                        break;
+                    }
                     self.node(on_point);
                 }
             }
         }
     }
 
-    fn descriptor_byte(&mut self) {
-        let ok_prefix = matches!(
-            self.buf.get(..self.len),
-            Some([SYNC]) | Some([SYNC, SYNC2, ..])
-        );
+    /// Works on a (possible) descriptor at the front of the buffer; false when it needs more
+    /// bytes.
+    fn descriptor(&mut self) -> bool {
+        let head = self.buf.get(..self.len).unwrap_or(&[]);
+        let ok_prefix = matches!(head, [SYNC] | [SYNC, SYNC2, ..]);
         if !ok_prefix {
-            // Drop the first byte; a lone 0xA5 left behind may still start a descriptor.
-            self.drop_front(1);
-            if self.buf.first() != Some(&SYNC) && self.len == 1 {
+            if head.is_empty() {
+                return false;
+            }
+            if self.scanning {
+                // Not a descriptor after all: back to nodes, from the same bytes.
+                self.state = State::Nodes;
+            } else {
                 self.drop_front(1);
             }
-            return;
+            return true;
         }
         if self.len < DESCRIPTOR_LEN {
-            return;
+            return false;
         }
-        self.skipping = false;
-        self.response_bytes = self.response_bytes.saturating_add(DESCRIPTOR_LEN as u32);
-        let d = Descriptor::parse(self.buf.get(..DESCRIPTOR_LEN).unwrap_or(&[]));
-        self.len = 0;
-        self.state = match d {
-            Ok(Descriptor::SCAN) => State::Nodes,
-            Ok(Descriptor::INFO) => State::Payload(INFO_LEN as u8),
-            Ok(Descriptor::HEALTH) => State::Payload(HEALTH_LEN as u8),
-            _ => {
-                bump(&mut self.stats.bad_frames);
-                State::Descriptor
-            }
+        let next = match Descriptor::parse(head) {
+            Ok(Descriptor::SCAN) => Some(State::Nodes),
+            Ok(Descriptor::INFO) => Some(State::Payload(INFO_LEN as u8)),
+            Ok(Descriptor::HEALTH) => Some(State::Payload(HEALTH_LEN as u8)),
+            _ => None,
         };
+        match next {
+            Some(state) => {
+                self.skipping = false;
+                self.response_bytes = self.response_bytes.saturating_add(DESCRIPTOR_LEN as u32);
+                self.consume(DESCRIPTOR_LEN);
+                self.scanning = state == State::Nodes;
+                self.state = state;
+            }
+            None if self.scanning => {
+                // `A5 5A` inside node data: slide by one byte and read nodes again.
+                self.drop_front(1);
+                self.state = State::Nodes;
+            }
+            None => self.drop_front(1),
+        }
+        true
     }
 
     fn node(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
         match RplidarNode::parse(self.buf.get(..NODE_LEN).unwrap_or(&[])) {
             Ok(node) => {
-                self.len = 0;
+                self.consume(NODE_LEN);
                 self.skipping = false;
                 bump(&mut self.stats.frames_ok);
                 bump(&mut self.stats.points);
@@ -609,19 +636,26 @@ impl RplidarDecoder {
                 on_point(node.point());
             }
             Err(RplidarError::AngleOutOfRange) => {
-                self.len = 0;
+                self.consume(NODE_LEN);
                 bump(&mut self.stats.bad_frames);
             }
             Err(_) => {
                 bump(&mut self.stats.bad_checksum);
                 if self.buf.starts_with(&[SYNC, SYNC2]) {
-                    // A new response descriptor (the scan was restarted).
+                    // Perhaps a new response descriptor (the scan was restarted).
                     self.state = State::Descriptor;
                 } else {
                     self.drop_front(1);
                 }
             }
         }
+    }
+
+    /// Removes `n` bytes that were used.
+    fn consume(&mut self, n: usize) {
+        let n = n.min(self.len);
+        self.buf.copy_within(n..self.len, 0);
+        self.len -= n;
     }
 
     fn drop_front(&mut self, n: usize) {
