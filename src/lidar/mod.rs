@@ -40,6 +40,8 @@
 //! [`Scan`]: crate::scan::Scan
 
 pub mod assembler;
+#[cfg(feature = "hal")]
+pub mod io;
 pub mod ld06;
 pub mod rplidar;
 pub mod xv11;
@@ -124,6 +126,32 @@ impl core::fmt::Display for EncodeError {
 }
 
 impl core::error::Error for EncodeError {}
+
+/// What every decoder of this module does: take bytes one at a time and hand out the points of
+/// frames that passed their checks. Lets adapters and tools work with any of them.
+pub trait StreamDecoder {
+    /// Feeds one byte; `on_point` is called for each point of a frame this byte completed.
+    fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint));
+    /// The decoder's counters.
+    fn stats(&self) -> DecoderStats;
+}
+
+macro_rules! stream_decoder {
+    ($t:ty) => {
+        impl StreamDecoder for $t {
+            #[inline]
+            fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
+                <$t>::push_byte(self, byte, on_point)
+            }
+            fn stats(&self) -> DecoderStats {
+                <$t>::stats(self)
+            }
+        }
+    };
+}
+stream_decoder!(ld06::Ld06Decoder);
+stream_decoder!(rplidar::RplidarDecoder);
+stream_decoder!(xv11::Xv11Decoder);
 
 /// Adds one to a counter, saturating (counters never wrap to a misleading small value).
 #[inline(always)]
