@@ -14,6 +14,7 @@ pub mod fixed_point;
 pub mod gaussian;
 pub mod intrinsics;
 pub mod landmark;
+pub mod lidar;
 pub mod math;
 pub mod mcl;
 pub mod model;
