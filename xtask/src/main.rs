@@ -4,6 +4,7 @@
 mod budgets;
 mod demo;
 mod demo_ref;
+mod lidar;
 
 use clap::{Parser, Subcommand};
 use std::collections::BTreeMap;
@@ -120,6 +121,18 @@ enum Task {
         #[arg(long)]
         show_failure: bool,
     },
+    /// The sensor path through an emulated peripheral: stream bytes into USART1 of QEMU's
+    /// netduinoplus2 (STM32F405) and check what the firmware (firmware/src/bin/lidar_uart.rs)
+    /// reports.
+    ///
+    /// Builds the program for the STM32F405 layout, starts QEMU with USART1 on a Unix socket,
+    /// waits for the firmware's ready line, sends the stream and checks the report: every byte
+    /// received in order (count and CRC-32).
+    Lidar {
+        /// Length of the test stream, bytes.
+        #[arg(long, default_value_t = 32_768)]
+        bytes: usize,
+    },
     /// Regenerate firmware/assets/ (Intel map blob and scans) from ../shared/data.
     DemoAssets,
     /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
@@ -152,6 +165,7 @@ fn main() -> ExitCode {
         Task::Demo { board } => demo::demo(board),
         Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
+        Task::Lidar { bytes } => lidar::lidar(bytes),
         Task::DemoAssets => demo::demo_assets(),
         Task::Refcases { check } => refcases(check),
         Task::Modelcases { check } => modelcases(check),
