@@ -12,6 +12,7 @@ pub mod fixed_point;
 pub mod gaussian;
 pub mod intrinsics;
 pub mod landmark;
+pub mod lidar;
 pub mod math;
 pub mod model;
 pub mod pose;

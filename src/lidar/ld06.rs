@@ -1,0 +1,616 @@
+//! LDROBOT LD06 / LD19 / STL-19P frames: decoder (byte-at-a-time) and encoder.
+//!
+//! Protocol as published by LDROBOT (LD06 and LD19 development manuals, "communication
+//! protocol" chapter; the same layout is used by their `ldlidar_stl_ros2` driver). A frame is
+//! [`FRAME_LEN`] = 47 bytes, all multi-byte fields little-endian:
+//!
+//! | offset | size | field |
+//! |---:|---:|---|
+//! | 0 | 1 | header, [`HEADER`] = `0x54` |
+//! | 1 | 1 | VerLen, [`VER_LEN`] = `0x2C`: packet type 1 (upper 3 bits), 12 points (lower 5 bits) |
+//! | 2 | 2 | rotation speed, degrees per second |
+//! | 4 | 2 | start angle, 0.01° |
+//! | 6 | 36 | 12 × (distance mm `u16`, intensity `u8`) |
+//! | 42 | 2 | end angle, 0.01° |
+//! | 44 | 2 | timestamp, ms (the sensor wraps it at 30,000) |
+//! | 46 | 1 | CRC-8 of bytes 0..46: polynomial `0x4D`, initial value 0, not reflected, no final XOR |
+//!
+//! The points of a frame are evenly spaced from the start to the end angle, clockwise: point `i`
+//! lies at `start + i · (end − start) / 11`, where `end − start` is taken modulo 360° (a frame
+//! may straddle 0°). A distance of 0 means "no measurement" and is emitted with
+//! `valid == false`.
+//!
+//! The decoder only accepts VerLen `0x2C` (the fixed 12-point frame all three sensors send).
+//! After a failed checksum it looks for the next header candidate inside the rejected bytes, so
+//! a truncated frame costs only itself, not the frame that follows it.
+
+use super::{bump, DecoderStats, EncodeError, LidarPoint};
+use crc::{Algorithm, Crc};
+
+/// Frame header byte.
+pub const HEADER: u8 = 0x54;
+/// The VerLen byte of a 12-point frame.
+pub const VER_LEN: u8 = 0x2C;
+/// Bytes per frame.
+pub const FRAME_LEN: usize = 47;
+/// Points per frame.
+pub const POINTS_PER_FRAME: usize = 12;
+/// Angles are in hundredths of a degree, below this value.
+pub const FULL_TURN_CDEG: u16 = 36_000;
+/// The sensor's timestamp wraps at this many milliseconds.
+pub const TIMESTAMP_WRAP_MS: u16 = 30_000;
+
+/// The LD06 CRC-8 (polynomial `0x4D`, init 0, not reflected, no final XOR). Its check value
+/// (the CRC of ASCII `123456789`) is `0xC3`.
+pub const CRC_8_LD06: Algorithm<u8> = Algorithm {
+    width: 8,
+    poly: 0x4D,
+    init: 0x00,
+    refin: false,
+    refout: false,
+    xorout: 0x00,
+    check: 0xC3,
+    residue: 0x00,
+};
+
+const CRC8: Crc<u8> = Crc::<u8>::new(&CRC_8_LD06);
+
+/// The LD06 CRC-8 of `bytes`.
+pub fn crc8(bytes: &[u8]) -> u8 {
+    CRC8.checksum(bytes)
+}
+
+/// Why a 47-byte frame was rejected by [`Ld06Frame::parse`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum Ld06Error {
+    /// Fewer than [`FRAME_LEN`] bytes.
+    Truncated(usize),
+    /// The first two bytes are not `0x54 0x2C`.
+    BadHeader,
+    /// The CRC-8 does not match.
+    BadChecksum {
+        /// CRC carried by the frame.
+        carried: u8,
+        /// CRC computed over bytes 0..46.
+        computed: u8,
+    },
+    /// A start or end angle ≥ 360°.
+    AngleOutOfRange,
+}
+
+impl core::fmt::Display for Ld06Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Truncated(n) => write!(f, "frame truncated at {n} bytes"),
+            Self::BadHeader => f.write_str("frame does not start with 0x54 0x2c"),
+            Self::BadChecksum { carried, computed } => {
+                write!(f, "crc {carried:#04x} carried, {computed:#04x} computed")
+            }
+            Self::AngleOutOfRange => f.write_str("angle of 360 degrees or more"),
+        }
+    }
+}
+
+impl core::error::Error for Ld06Error {}
+
+/// One measurement of a frame, as transmitted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Ld06Sample {
+    /// Distance, millimetres; 0 means no measurement.
+    pub distance_mm: u16,
+    /// Intensity (signal strength), 0..=255.
+    pub intensity: u8,
+}
+
+/// One frame's fields, in the protocol's units.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Ld06Frame {
+    /// Rotation speed, degrees per second (3,600 is 10 revolutions per second).
+    pub speed_deg_per_s: u16,
+    /// Angle of the first point, hundredths of a degree clockwise, `< 36,000`.
+    pub start_angle_cdeg: u16,
+    /// The twelve measurements, in clockwise order.
+    pub samples: [Ld06Sample; POINTS_PER_FRAME],
+    /// Angle of the last point, hundredths of a degree clockwise, `< 36,000`.
+    pub end_angle_cdeg: u16,
+    /// Timestamp, milliseconds (wraps at [`TIMESTAMP_WRAP_MS`]).
+    pub timestamp_ms: u16,
+}
+
+fn le16(lo: u8, hi: u8) -> u16 {
+    u16::from_le_bytes([lo, hi])
+}
+
+impl Ld06Frame {
+    /// Parses and checks one frame: header, CRC, then angle ranges.
+    ///
+    /// # Errors
+    /// [`Ld06Error::Truncated`], [`Ld06Error::BadHeader`], [`Ld06Error::BadChecksum`],
+    /// [`Ld06Error::AngleOutOfRange`].
+    pub fn parse(bytes: &[u8]) -> Result<Self, Ld06Error> {
+        let b: &[u8; FRAME_LEN] = bytes
+            .get(..FRAME_LEN)
+            .and_then(|s| s.try_into().ok())
+            .ok_or(Ld06Error::Truncated(bytes.len()))?;
+        Self::parse_array(b)
+    }
+
+    fn parse_array(b: &[u8; FRAME_LEN]) -> Result<Self, Ld06Error> {
+        if b[0] != HEADER || b[1] != VER_LEN {
+            return Err(Ld06Error::BadHeader);
+        }
+        let computed = crc8(b.get(..FRAME_LEN - 1).unwrap_or(&[]));
+        let carried = b[FRAME_LEN - 1];
+        if computed != carried {
+            return Err(Ld06Error::BadChecksum { carried, computed });
+        }
+        let frame = Self::fields(b);
+        if frame.start_angle_cdeg >= FULL_TURN_CDEG || frame.end_angle_cdeg >= FULL_TURN_CDEG {
+            return Err(Ld06Error::AngleOutOfRange);
+        }
+        Ok(frame)
+    }
+
+    /// Reads the fields without any check.
+    fn fields(b: &[u8; FRAME_LEN]) -> Self {
+        let mut samples = [Ld06Sample::default(); POINTS_PER_FRAME];
+        let raw = b.get(6..42).unwrap_or(&[]);
+        for (s, c) in samples.iter_mut().zip(raw.chunks_exact(3)) {
+            if let [lo, hi, intensity] = *c {
+                *s = Ld06Sample {
+                    distance_mm: le16(lo, hi),
+                    intensity,
+                };
+            }
+        }
+        Self {
+            speed_deg_per_s: le16(b[2], b[3]),
+            start_angle_cdeg: le16(b[4], b[5]),
+            samples,
+            end_angle_cdeg: le16(b[42], b[43]),
+            timestamp_ms: le16(b[44], b[45]),
+        }
+    }
+
+    /// Writes the frame, CRC included, into `out[..FRAME_LEN]`; returns [`FRAME_LEN`].
+    ///
+    /// Fields are written as given (an angle ≥ 360° is written too, so tests can build frames
+    /// the decoder must reject).
+    ///
+    /// # Errors
+    /// [`EncodeError::BufferTooSmall`] when `out` is shorter than [`FRAME_LEN`].
+    pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        let given = out.len();
+        let o: &mut [u8; FRAME_LEN] = out
+            .get_mut(..FRAME_LEN)
+            .and_then(|s| s.try_into().ok())
+            .ok_or(EncodeError::BufferTooSmall {
+                needed: FRAME_LEN,
+                given,
+            })?;
+        o[0] = HEADER;
+        o[1] = VER_LEN;
+        [o[2], o[3]] = self.speed_deg_per_s.to_le_bytes();
+        [o[4], o[5]] = self.start_angle_cdeg.to_le_bytes();
+        if let Some(raw) = o.get_mut(6..42) {
+            for (c, s) in raw.chunks_exact_mut(3).zip(self.samples.iter()) {
+                let [lo, hi] = s.distance_mm.to_le_bytes();
+                c.copy_from_slice(&[lo, hi, s.intensity]);
+            }
+        }
+        [o[42], o[43]] = self.end_angle_cdeg.to_le_bytes();
+        [o[44], o[45]] = self.timestamp_ms.to_le_bytes();
+        o[FRAME_LEN - 1] = crc8(o.get(..FRAME_LEN - 1).unwrap_or(&[]));
+        Ok(FRAME_LEN)
+    }
+
+    /// The span from the start to the end angle, hundredths of a degree, in `[0, 36,000)`
+    /// (clockwise, across 0° when the end angle is smaller than the start angle).
+    pub fn span_cdeg(&self) -> u16 {
+        let (s, e) = (self.start_angle_cdeg, self.end_angle_cdeg);
+        if e >= s {
+            e - s
+        } else {
+            // e < s < 36,000 in a checked frame, so this neither overflows nor wraps.
+            (FULL_TURN_CDEG - s).wrapping_add(e)
+        }
+    }
+
+    /// Point `i` (`< 12`) of the frame: its angle interpolated between the start and end angles.
+    ///
+    /// The angle is computed in integers of 1/1,100 degree (`start · 11 + span · i`, reduced
+    /// modulo 360°), then converted once, so a frame with whole-degree angles gives exact
+    /// whole-degree points.
+    pub fn point(&self, i: usize) -> LidarPoint {
+        let s = self.samples.get(i).copied().unwrap_or_default();
+        let step = POINTS_PER_FRAME as u32 - 1;
+        let full = u32::from(FULL_TURN_CDEG) * step;
+        let mut a =
+            u32::from(self.start_angle_cdeg) * step + u32::from(self.span_cdeg()) * i as u32;
+        if a >= full {
+            a -= full;
+        }
+        LidarPoint {
+            angle_cw_deg: a as f32 * (1.0 / (100.0 * step as f32)),
+            range_m: f32::from(s.distance_mm) * 0.001,
+            quality: u16::from(s.intensity),
+            valid: s.distance_mm != 0,
+            timestamp_ms: Some(self.timestamp_ms),
+        }
+    }
+}
+
+/// Byte-at-a-time LD06 stream decoder. See the module docs for the frame and the resync rule.
+#[derive(Clone, Debug)]
+pub struct Ld06Decoder {
+    buf: [u8; FRAME_LEN],
+    len: usize,
+    skipping: bool,
+    stats: DecoderStats,
+    last: Option<Ld06Frame>,
+}
+
+impl Default for Ld06Decoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Ld06Decoder {
+    /// A decoder waiting for a frame header.
+    pub const fn new() -> Self {
+        Self {
+            buf: [0; FRAME_LEN],
+            len: 0,
+            skipping: false,
+            stats: DecoderStats {
+                bytes: 0,
+                frames_ok: 0,
+                bad_checksum: 0,
+                bad_frames: 0,
+                skipped_bytes: 0,
+                resyncs: 0,
+                points: 0,
+            },
+            last: None,
+        }
+    }
+
+    /// Feeds received bytes; `on_point` is called for each of the 12 points of every frame
+    /// whose CRC passed, in order, as soon as the frame's last byte arrives.
+    pub fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
+        for &b in bytes {
+            self.push_byte(b, &mut on_point);
+        }
+    }
+
+    /// Feeds one byte (see [`Ld06Decoder::feed`]).
+    #[inline]
+    pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
+        bump(&mut self.stats.bytes);
+        match self.len {
+            0 => {
+                if byte == HEADER {
+                    self.buf[0] = byte;
+                    self.len = 1;
+                } else {
+                    self.skip(1);
+                }
+            }
+            1 => {
+                if byte == VER_LEN {
+                    self.buf[1] = byte;
+                    self.len = 2;
+                } else {
+                    // The 0x54 was not a header; this byte may be one.
+                    self.skip(1);
+                    if byte == HEADER {
+                        self.len = 1;
+                    } else {
+                        self.len = 0;
+                        self.skip(1);
+                    }
+                }
+            }
+            n => {
+                if let Some(slot) = self.buf.get_mut(n) {
+                    *slot = byte;
+                }
+                self.len = n + 1;
+                if self.len == FRAME_LEN {
+                    self.complete(on_point);
+                }
+            }
+        }
+    }
+
+    fn skip(&mut self, n: usize) {
+        if !self.skipping {
+            bump(&mut self.stats.resyncs);
+            self.skipping = true;
+        }
+        self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(n as u32);
+    }
+
+    fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
+        match Ld06Frame::parse_array(&self.buf) {
+            Ok(frame) => {
+                self.len = 0;
+                self.skipping = false;
+                bump(&mut self.stats.frames_ok);
+                self.last = Some(frame);
+                for i in 0..POINTS_PER_FRAME {
+                    on_point(frame.point(i));
+                }
+                self.stats.points = self.stats.points.saturating_add(POINTS_PER_FRAME as u32);
+            }
+            Err(Ld06Error::AngleOutOfRange) => {
+                // The CRC vouches for the bytes: the frame is whole, only its content is bad.
+                self.len = 0;
+                bump(&mut self.stats.bad_frames);
+            }
+            Err(_) => {
+                bump(&mut self.stats.bad_checksum);
+                // Re-examine the rejected bytes after the header: keep the first `0x54` that is
+                // followed by `0x2C` (or that ends the buffer) as the start of the next frame.
+                let rest = self.buf.get(1..).unwrap_or(&[]);
+                let next = rest
+                    .windows(2)
+                    .position(|w| w == [HEADER, VER_LEN])
+                    .or_else(|| (rest.last() == Some(&HEADER)).then(|| rest.len() - 1))
+                    .map_or(FRAME_LEN, |p| p + 1);
+                self.skip(next);
+                self.buf.copy_within(next.., 0);
+                self.len = FRAME_LEN - next;
+            }
+        }
+    }
+
+    /// The counters so far. `bytes == 47 · (frames_ok + bad_frames) + skipped_bytes +`
+    /// [`Ld06Decoder::buffered`] always holds.
+    pub fn stats(&self) -> DecoderStats {
+        self.stats
+    }
+
+    /// Bytes of a partial frame held, waiting for the rest.
+    pub fn buffered(&self) -> usize {
+        self.len
+    }
+
+    /// The last frame whose CRC passed (speed and timestamp included), if any.
+    pub fn last_frame(&self) -> Option<&Ld06Frame> {
+        self.last.as_ref()
+    }
+
+    /// Forgets any partial frame and zeroes the counters.
+    pub fn reset(&mut self) {
+        *self = Self::new();
+    }
+}
+
+/// Bytes needed by [`encode_revolution`] for `samples` points.
+pub const fn revolution_len(samples: usize) -> usize {
+    samples / POINTS_PER_FRAME * FRAME_LEN
+}
+
+/// Writes one revolution as LD06 frames: `samples[k]` is the point at `k · 360° / len`
+/// clockwise from 0°, twelve points per frame, in order.
+///
+/// The rotation speed field carries `speed_deg_per_s`; each frame's timestamp is
+/// `start_timestamp_ms` plus the time the rotor takes to reach the frame's start angle at that
+/// speed (rounded to the millisecond, wrapped at [`TIMESTAMP_WRAP_MS`]). Returns the bytes
+/// written, [`revolution_len`]`(samples.len())`.
+///
+/// # Errors
+/// [`EncodeError::BadSampleCount`] unless `samples.len()` is a positive multiple of 12 that
+/// divides 36,000 (so every point lies on a whole hundredth of a degree: 360 points give 1°
+/// steps, 480 give 0.75°); [`EncodeError::BufferTooSmall`].
+pub fn encode_revolution(
+    samples: &[Ld06Sample],
+    speed_deg_per_s: u16,
+    start_timestamp_ms: u16,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    let n = samples.len();
+    if n == 0 || n % POINTS_PER_FRAME != 0 || usize::from(FULL_TURN_CDEG) % n != 0 {
+        return Err(EncodeError::BadSampleCount(n));
+    }
+    let needed = revolution_len(n);
+    if out.len() < needed {
+        return Err(EncodeError::BufferTooSmall {
+            needed,
+            given: out.len(),
+        });
+    }
+    let step_cdeg = u32::from(FULL_TURN_CDEG) / n as u32;
+    for (f, (chunk, dst)) in samples
+        .chunks_exact(POINTS_PER_FRAME)
+        .zip(out.chunks_exact_mut(FRAME_LEN))
+        .enumerate()
+    {
+        let start = f as u32 * POINTS_PER_FRAME as u32 * step_cdeg;
+        let end = (start + (POINTS_PER_FRAME as u32 - 1) * step_cdeg) % u32::from(FULL_TURN_CDEG);
+        let elapsed_ms = if speed_deg_per_s == 0 {
+            0
+        } else {
+            // start [0.01°] / speed [°/s] · 1000 = start · 10 / speed, rounded.
+            (start * 10 + u32::from(speed_deg_per_s) / 2) / u32::from(speed_deg_per_s)
+        };
+        let ts = (u32::from(start_timestamp_ms) + elapsed_ms) % u32::from(TIMESTAMP_WRAP_MS);
+        let mut frame = Ld06Frame {
+            speed_deg_per_s,
+            start_angle_cdeg: start as u16,
+            samples: [Ld06Sample::default(); POINTS_PER_FRAME],
+            end_angle_cdeg: end as u16,
+            timestamp_ms: ts as u16,
+        };
+        frame.samples.copy_from_slice(chunk);
+        frame.emit(dst)?;
+    }
+    Ok(needed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Bit-by-bit CRC-8 (polynomial 0x4D, MSB first), independent of the `crc` crate's table.
+    fn crc8_bitwise(bytes: &[u8]) -> u8 {
+        let mut c = 0u8;
+        for &b in bytes {
+            c ^= b;
+            for _ in 0..8 {
+                c = if c & 0x80 != 0 {
+                    (c << 1) ^ 0x4D
+                } else {
+                    c << 1
+                };
+            }
+        }
+        c
+    }
+
+    #[test]
+    fn crc_matches_bitwise_definition_and_published_table_entries() {
+        assert_eq!(crc8(b"123456789"), crc8_bitwise(b"123456789"));
+        assert_eq!(crc8(b"123456789"), 0xC3);
+        // LDROBOT's published table starts 0x00, 0x4d, 0x9a, 0xd7: the CRC of one byte 0..=3.
+        for (b, want) in [(0u8, 0x00u8), (1, 0x4D), (2, 0x9A), (3, 0xD7)] {
+            assert_eq!(crc8(&[b]), want);
+        }
+        for len in 0..64u8 {
+            let v: Vec<u8> = (0..len).map(|i| i.wrapping_mul(37) ^ 0xA5).collect();
+            assert_eq!(crc8(&v), crc8_bitwise(&v));
+        }
+    }
+
+    fn sample_frame() -> Ld06Frame {
+        let mut samples = [Ld06Sample::default(); 12];
+        for (i, s) in samples.iter_mut().enumerate() {
+            s.distance_mm = 1000 + i as u16 * 7;
+            s.intensity = 200 - i as u8;
+        }
+        Ld06Frame {
+            speed_deg_per_s: 3600,
+            start_angle_cdeg: 35_500,
+            samples,
+            end_angle_cdeg: 600,
+            timestamp_ms: 29_999,
+        }
+    }
+
+    #[test]
+    fn emit_then_parse_round_trips_and_layout_is_little_endian() {
+        let f = sample_frame();
+        let mut out = [0u8; 50];
+        assert_eq!(f.emit(&mut out), Ok(FRAME_LEN));
+        assert_eq!(&out[..6], &[0x54, 0x2C, 0x10, 0x0E, 0xAC, 0x8A]);
+        assert_eq!(&out[6..9], &[0xE8, 0x03, 200]);
+        assert_eq!(out[46], crc8_bitwise(&out[..46]));
+        assert_eq!(Ld06Frame::parse(&out), Ok(f));
+        assert_eq!(
+            f.emit(&mut [0u8; 46]),
+            Err(EncodeError::BufferTooSmall {
+                needed: 47,
+                given: 46
+            })
+        );
+    }
+
+    #[test]
+    fn interpolation_wraps_across_zero() {
+        // 355.00° .. 6.00°: span 11°, 1° per point; point 5 is at 360 → 0°.
+        let f = sample_frame();
+        assert_eq!(f.span_cdeg(), 1100);
+        let want = [
+            355.0, 356.0, 357.0, 358.0, 359.0, 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0,
+        ];
+        for (i, w) in want.iter().enumerate() {
+            let p = f.point(i);
+            assert!((p.angle_cw_deg - w).abs() < 1e-4, "{i}: {}", p.angle_cw_deg);
+            assert!((0.0..360.0).contains(&p.angle_cw_deg));
+        }
+        assert_eq!(f.point(3).timestamp_ms, Some(29_999));
+        assert!((f.point(1).range_m - 1.007).abs() < 1e-6);
+    }
+
+    #[test]
+    fn decoder_skips_garbage_and_rejects_bad_crc() {
+        let f = sample_frame();
+        let mut frame = [0u8; FRAME_LEN];
+        f.emit(&mut frame).unwrap();
+        let mut stream = vec![0x00, 0x54, 0x54, 0x11];
+        stream.extend_from_slice(&frame);
+        let mut bad = frame;
+        bad[20] ^= 0x04;
+        stream.extend_from_slice(&bad);
+        stream.extend_from_slice(&frame[..30]); // truncated
+        stream.extend_from_slice(&frame);
+        let mut d = Ld06Decoder::new();
+        let mut pts = Vec::new();
+        d.feed(&stream, |p| pts.push(p));
+        let s = d.stats();
+        assert_eq!(s.frames_ok, 2);
+        assert_eq!(pts.len(), 24);
+        assert_eq!(s.bad_checksum, 2);
+        assert_eq!(s.bytes as usize, stream.len());
+        assert_eq!(
+            s.bytes as usize,
+            FRAME_LEN * (s.frames_ok + s.bad_frames) as usize
+                + s.skipped_bytes as usize
+                + d.buffered()
+        );
+        for p in &pts {
+            assert_eq!(p.timestamp_ms, Some(29_999));
+        }
+    }
+
+    #[test]
+    fn angle_out_of_range_with_good_crc_is_counted_not_emitted() {
+        let mut f = sample_frame();
+        f.end_angle_cdeg = 36_000;
+        let mut frame = [0u8; FRAME_LEN];
+        f.emit(&mut frame).unwrap();
+        let mut d = Ld06Decoder::new();
+        let mut n = 0;
+        d.feed(&frame, |_| n += 1);
+        assert_eq!((n, d.stats().bad_frames, d.stats().frames_ok), (0, 1, 0));
+    }
+
+    #[test]
+    fn revolution_encoder_lays_out_whole_degrees() {
+        let samples: Vec<Ld06Sample> = (0..360)
+            .map(|k| Ld06Sample {
+                distance_mm: k as u16 + 1,
+                intensity: 100,
+            })
+            .collect();
+        let mut out = vec![0u8; revolution_len(360)];
+        assert_eq!(
+            encode_revolution(&samples, 3600, 100, &mut out),
+            Ok(30 * 47)
+        );
+        let mut d = Ld06Decoder::new();
+        let mut pts = Vec::new();
+        d.feed(&out, |p| pts.push(p));
+        assert_eq!(pts.len(), 360);
+        for (k, p) in pts.iter().enumerate() {
+            assert!(
+                (p.angle_cw_deg - k as f32).abs() < 1e-3,
+                "{k}: {}",
+                p.angle_cw_deg
+            );
+            assert!((p.range_m - (k as f32 + 1.0) * 1e-3).abs() < 1e-7);
+        }
+        // Frame 15 starts at 180°: half a turn at 3,600 °/s is 50 ms after frame 0.
+        assert_eq!(pts[180].timestamp_ms, Some(150));
+        assert_eq!(
+            encode_revolution(&samples[..350], 3600, 0, &mut out),
+            Err(EncodeError::BadSampleCount(350))
+        );
+    }
+}

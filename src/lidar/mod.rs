@@ -1,0 +1,130 @@
+//! 2-D LiDAR byte-stream decoders, their encoders, and the assembly of points into a [`Scan`].
+//!
+//! The spinning 2-D LiDARs that small robots carry stream angle-stamped points over a UART,
+//! clockwise, at their own rotation speed, in frames protected by a checksum. This module turns
+//! such a stream into the crate's [`Scan<N>`](crate::scan::Scan) on a caller's
+//! [`BeamLayout<N>`](crate::scan::BeamLayout) in two independent steps:
+//!
+//! 1. a **decoder** per sensor family ([`ld06`]) is a byte-at-a-time state machine. Feed it any
+//!    slice of received bytes (an interrupt's byte, a DMA half-buffer) with `feed`; it finds the
+//!    frame header, resynchronises after garbage or lost bytes, verifies the frame's checksum and
+//!    only then hands every point of the frame to the caller's closure as a [`LidarPoint`]. It
+//!    never allocates and keeps [`DecoderStats`] readable at any time;
+//! 2. the [`ScanAssembler`] bins the points of one revolution into the layout's beams and hands
+//!    back a finished scan when the angle wraps.
+//!
+//! Each sensor file holds the parse and the emit side of its frames together (the encoder writes
+//! into a caller's `&mut [u8]`), so tests, the host tools and the stream fed to the firmware all
+//! produce frames through the same code. The protocol documents followed are cited in each file
+//! and in `docs/lidar.md`.
+//!
+//! ```
+//! use beamfield::lidar::{ld06::Ld06Decoder, AssemblerConfig, ScanAssembler};
+//! use beamfield::{BeamLayout, SensorMount};
+//!
+//! // 360 beams, 1° apart, counter-clockwise from the sensor's zero direction.
+//! let layout = BeamLayout::<360>::uniform(0.0, 1f32.to_radians(), 360, 12.0, SensorMount::CENTERED)?;
+//! let mut assembler = ScanAssembler::new(&layout, AssemblerConfig::for_layout(&layout))?;
+//! let mut decoder = Ld06Decoder::new();
+//! let received: &[u8] = &[0x00, 0x54]; // bytes from the UART
+//! let mut scans = 0;
+//! decoder.feed(received, |point| {
+//!     if let Some(_scan) = assembler.push(point) {
+//!         scans += 1; // score `_scan` here
+//!     }
+//! });
+//! assert_eq!(scans, 0);
+//! # Ok::<(), Box<dyn core::error::Error>>(())
+//! ```
+//!
+//! [`Scan`]: crate::scan::Scan
+
+pub mod assembler;
+pub mod ld06;
+
+pub use assembler::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution, ScanAssembler};
+
+/// One point as a LiDAR reports it, in the sensor's own (clockwise) convention.
+///
+/// Decoders emit only points of frames whose checksum passed. A point with `valid == false` is
+/// one the sensor itself flagged as "no measurement" (LD06: distance 0); it still tells the
+/// assembler where the rotor is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LidarPoint {
+    /// Angle clockwise from the sensor's zero direction (seen from above), degrees, in `[0, 360)`.
+    pub angle_cw_deg: f32,
+    /// Measured distance, metres (0 when the sensor reported no measurement).
+    pub range_m: f32,
+    /// The sensor's quality or intensity figure, in the protocol's own unit (LD06: intensity
+    /// 0..=255).
+    pub quality: u16,
+    /// False when the sensor flagged the point as carrying no measurement.
+    pub valid: bool,
+    /// The sensor's timestamp of the point's frame, milliseconds, when the protocol has one
+    /// (LD06: wraps at 30,000 ms).
+    pub timestamp_ms: Option<u16>,
+}
+
+/// Counters of a decoder, readable at any time.
+///
+/// Every byte fed is accounted for: `bytes == frame_len · (frames_ok + bad_frames) +
+/// skipped_bytes + buffered`, where `buffered` is the length of the partial frame the decoder
+/// holds (bytes of a frame whose checksum failed are either skipped or re-examined as the start
+/// of the next frame).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DecoderStats {
+    /// Bytes fed so far.
+    pub bytes: u32,
+    /// Frames whose checksum passed and whose content was valid; their points were emitted.
+    pub frames_ok: u32,
+    /// Complete frames whose checksum failed; none of their points was emitted.
+    pub bad_checksum: u32,
+    /// Frames whose checksum passed but whose content is impossible (e.g. an angle ≥ 360°); none
+    /// of their points was emitted.
+    pub bad_frames: u32,
+    /// Bytes discarded while searching for a frame header (start-up garbage, the rest of a
+    /// frame whose checksum failed up to the next header candidate, lost alignment).
+    pub skipped_bytes: u32,
+    /// How many times the decoder started discarding bytes (one per run of skipped bytes).
+    pub resyncs: u32,
+    /// Points handed to the caller.
+    pub points: u32,
+}
+
+/// Errors writing a frame into a caller's buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum EncodeError {
+    /// The output buffer is too small.
+    BufferTooSmall {
+        /// Bytes needed.
+        needed: usize,
+        /// Bytes available.
+        given: usize,
+    },
+    /// A revolution whose sample count the protocol cannot lay out evenly (see the encoder's
+    /// documentation for the rule).
+    BadSampleCount(usize),
+}
+
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::BufferTooSmall { needed, given } => {
+                write!(f, "output buffer holds {given} bytes, {needed} needed")
+            }
+            Self::BadSampleCount(n) => write!(f, "{n} samples cannot form whole frames"),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// Adds one to a counter, saturating (counters never wrap to a misleading small value).
+#[inline(always)]
+pub(crate) fn bump(counter: &mut u32) {
+    *counter = counter.saturating_add(1);
+}
