@@ -1,22 +1,60 @@
-//! The sensor path through a real peripheral: a LiDAR byte stream received through USART1 of
-//! the STM32F405 (QEMU `netduinoplus2`, run by `cargo xtask lidar`).
+//! The sensor path through a real peripheral: an LD06 LiDAR byte stream received through
+//! USART1 of the STM32F405 (QEMU `netduinoplus2`, run by `cargo xtask lidar`), decoded,
+//! assembled into scans and scored against the Intel map linked into flash.
 //!
 //! The program sets up the receiver ([`beamfield_firmware::usart`]), prints its ready line
 //! through semihosting (bytes sent before the receiver is on are lost, so the host waits for
 //! it), then reads the stream: an 8-byte header of the test harness (`BFLD` and the stream's
-//! length in bytes, little-endian u32; a real sensor needs none, it is how the program knows
-//! where the test ends) followed by the sensor's bytes. They are taken in chunks of up to
-//! [`CHUNK`] bytes into RAM, and each chunk is processed between the instruction-count markers
-//! (so a counting run measures the processing, not the waiting for bytes). At the end it
-//! prints the byte count and the CRC-32 of what it received, which the host compares with what
-//! it sent.
+//! length in bytes, little-endian u32; a real sensor sends none, it is how the program knows
+//! where the test ends) followed by the sensor's bytes.
+//!
+//! The bytes are taken in chunks of up to [`CHUNK`] bytes into RAM (as a DMA or interrupt ring
+//! buffer would hand them over) and pushed through the library's LD06 decoder into a
+//! `ScanAssembler` on the Intel log's layout (180 beams, −90° … +89° counter-clockwise, sensor
+//! at the centre). Decoding and assembly run between the instruction-count markers; a finished
+//! scan closes the counted region and is then scored (`lidar_plan.rs`, shared with the host's
+//! recomputation): the demo's tempered likelihood field at every pose of its coarse grid around
+//! the scan's logged pose, and compared beam by beam with the log's ranges (the demo's assets
+//! hold the same 8 scans the host encoded). After each chunk, the CRC-32 of the chunk is counted
+//! as a baseline. At the end: the assembler's pending revolution, the decoder's and the
+//! assembler's counters, and the byte count and CRC-32 of everything received, which the host
+//! compares with what it sent.
+//!
+//! Exit status 1 when a scan could not be scored, had a beam that differs from the log, or more
+//! scans were assembled than sent.
 #![no_std]
 #![no_main]
 
+use beamfield::lidar::ld06::Ld06Decoder;
+use beamfield::lidar::ScanAssembler;
+use beamfield::Pose;
 use beamfield_firmware::usart::{UsartRx, LD06_CONFIG};
-use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println};
+use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println, Fixed};
 use cortex_m_rt::entry;
 use panic_semihosting as _;
+
+#[path = "../demo_plan.rs"]
+#[allow(dead_code)]
+mod demo_plan;
+#[path = "../lidar_plan.rs"]
+mod lidar_plan;
+use demo_plan::{offset, POSES};
+use lidar_plan::{Setup, BEAMS};
+
+/// One real scan of the log with its logged (corrected) laser pose (the demo's assets).
+pub struct DemoScan {
+    /// Index of the FLASER line in the log.
+    pub log_index: u32,
+    /// Logged laser pose `[x_m, y_m, theta_rad]`.
+    pub pose: [f32; 3],
+    /// The 180 ranges, metres (the log's max-range value means "no return").
+    pub ranges_m: [f32; BEAMS],
+}
+
+include!("../../assets/scans.rs");
+
+/// The 5 cm distance field of the Intel map (the demo's).
+static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
 
 /// Bytes received before a chunk is processed.
 const CHUNK: usize = 4096;
@@ -25,12 +63,75 @@ const MAGIC: [u8; 4] = *b"BFLD";
 /// CRC-32 (ISO-HDLC, the zlib/PNG one) of the received bytes, for the transport check.
 const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
+/// Scores and reports the `k`-th assembled scan; false when it could not be (no such scan in
+/// the plan, weights not normalizable) or does not match the log.
+fn report(
+    k: usize,
+    setup: &Setup<'_>,
+    assembler: &ScanAssembler<BEAMS>,
+    weights: &mut [f32; POSES],
+) -> bool {
+    let Some(demo) = SCANS.get(k) else {
+        println!(
+            "scan {}: more revolutions than the {} scans sent",
+            k,
+            SCANS.len()
+        );
+        return false;
+    };
+    let scan = assembler.scan();
+    let logged = Pose::new(demo.pose[0], demo.pose[1], demo.pose[2]);
+    let m = lidar_plan::compare(scan, &demo.ranges_m, MAX_RANGE_M);
+    let scored = match lidar_plan::score(setup, scan, &logged, weights) {
+        Ok(s) => s,
+        Err(e) => {
+            println!("scan {}: weights not normalizable: {}", k, e);
+            return false;
+        }
+    };
+    let (d_m, dth_deg, _) = offset(&scored.best, &logged);
+    println!(
+        "scan {} (log line {}): {} points; {} beams valid; vs log: {} match, {} missing, {} wrong; best ({}, {}, {} deg) offset {} cm {} deg; log-likelihood {} ESS {}",
+        k,
+        demo.log_index,
+        assembler.revolution().points,
+        scored.valid,
+        m.matching,
+        m.missing,
+        m.wrong,
+        Fixed::new(f64::from(scored.best.x_m), 3),
+        Fixed::new(f64::from(scored.best.y_m), 3),
+        Fixed::new(f64::from(scored.best.theta_rad.to_degrees()), 1),
+        Fixed::new(f64::from(d_m) * 100.0, 1),
+        Fixed::new(f64::from(dth_deg), 1),
+        Fixed::new(f64::from(scored.log_likelihood), 3),
+        Fixed::new(f64::from(scored.ess), 1),
+    );
+    m.wrong == 0
+}
+
 #[entry]
 fn main() -> ! {
     let Some(dp) = stm32f4::stm32f405::Peripherals::take() else {
         println!("lidar_uart: device peripherals taken twice");
         exit(false)
     };
+    let setup = match lidar_plan::setup(BLOB, MAX_RANGE_M) {
+        Ok(s) => s,
+        Err(e) => {
+            println!("lidar_uart: {}", e);
+            exit(false)
+        }
+    };
+    let mut assembler = match lidar_plan::assembler(&setup) {
+        Ok(a) => a,
+        Err(e) => {
+            println!("lidar_uart: assembler rejected: {}", e);
+            exit(false)
+        }
+    };
+    let mut decoder = Ld06Decoder::new();
+    let mut weights = [0.0f32; POSES];
     let mut rx = match UsartRx::new(dp.USART1, &dp.RCC, &dp.GPIOA, LD06_CONFIG) {
         Ok(rx) => rx,
         Err(e) => {
@@ -40,8 +141,8 @@ fn main() -> ! {
     };
     rx.enable_wakeup();
     println!(
-        "lidar_uart: ready: USART1 receiving 8N1 at {} baud on PA10",
-        LD06_CONFIG.baud
+        "lidar_uart: ready: USART1 receiving 8N1 at {} baud on PA10; LD06 decoder, {}-beam Intel layout, {} poses per scan",
+        LD06_CONFIG.baud, BEAMS, POSES
     );
 
     // Header: the tag (anything before it is skipped), then the length.
@@ -65,26 +166,89 @@ fn main() -> ! {
     let mut buf = [0u8; CHUNK];
     let mut digest = CRC32.digest();
     let mut done = 0usize;
-    let mut chunks = 0u32;
+    let (mut chunks, mut regions) = (0u32, 0u32);
+    let mut scans = 0usize;
+    let mut ok = true;
     while done < total {
         let n = (total - done).min(CHUNK);
         let chunk = &mut buf[..n];
         for b in chunk.iter_mut() {
             *b = rx.read_wfi();
         }
+        // Decode and assemble between the counting markers; a finished scan ends the region
+        // (it is scored outside it) and the next byte opens a new one.
+        let scans_before = scans;
+        let mut bytes = chunk.iter();
+        loop {
+            let mut finished = false;
+            bench_mark_start();
+            for &b in bytes.by_ref() {
+                decoder.push_byte(b, &mut |p| {
+                    if assembler.push(p).is_some() {
+                        finished = true;
+                    }
+                });
+                if finished {
+                    break;
+                }
+            }
+            bench_mark_end();
+            regions += 1;
+            if !finished {
+                break;
+            }
+            ok &= report(scans, &setup, &assembler, &mut weights);
+            scans += 1;
+        }
+        // The baseline of the same run: a table-driven CRC-32 over the same bytes.
         bench_mark_start();
-        core::hint::black_box(&*chunk);
-        bench_mark_end();
         digest.update(chunk);
+        bench_mark_end();
+        regions += 1;
+        println!(
+            "chunk {}: {} bytes, {} scans finished",
+            chunks,
+            n,
+            scans - scans_before
+        );
         done += n;
         chunks += 1;
     }
+    // The end of the recording: the pending revolution.
+    bench_mark_start();
+    let last = assembler.finish().is_some();
+    bench_mark_end();
+    regions += 1;
+    if last {
+        ok &= report(scans, &setup, &assembler, &mut weights);
+        scans += 1;
+    }
+    let d = decoder.stats();
     println!(
-        "stream: received {} bytes in {} chunks, crc32 {:08x}",
+        "decoder: {} bytes, {} frames ok, {} bad checksums, {} bad frames, {} bytes skipped in {} resyncs, {} points",
+        d.bytes, d.frames_ok, d.bad_checksum, d.bad_frames, d.skipped_bytes, d.resyncs, d.points
+    );
+    let a = assembler.stats();
+    println!(
+        "assembler: {} points, {} accepted, {} flagged invalid, {} out of range, {} low quality, {} bad angle, {} outside the layout, {} replaced, {} revolutions",
+        a.points,
+        a.accepted,
+        a.flagged_invalid,
+        a.out_of_range,
+        a.low_quality,
+        a.bad_angle,
+        a.outside_layout,
+        a.replaced,
+        a.revolutions
+    );
+    println!(
+        "stream: received {} bytes in {} chunks, crc32 {:08x}; {} scans; {} counted regions",
         done,
         chunks,
-        digest.finalize()
+        digest.finalize(),
+        scans,
+        regions
     );
     let _ = rx.release();
-    exit(true)
+    exit(ok)
 }
