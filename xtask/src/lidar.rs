@@ -31,7 +31,7 @@ const ACCEPT_DEG: f32 = 0.75;
 const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Builds the firmware program for the STM32F405 layout and returns its ELF.
-fn build() -> Result<PathBuf> {
+fn build(split: bool) -> Result<PathBuf> {
     ensure_target(FIRMWARE_TARGET)?;
     let mut cmd = cargo();
     cmd.current_dir(repo_root().join("firmware"))
@@ -45,6 +45,9 @@ fn build() -> Result<PathBuf> {
             BIN,
             "--message-format=json-render-diagnostics",
         ]);
+    if split {
+        cmd.args(["--features", "decode-split"]);
+    }
     eprintln!("+ (cd firmware && {})", show(&cmd));
     let out = capture(&mut cmd)?;
     out.lines()
@@ -239,9 +242,12 @@ fn region_counts(text: &str) -> Vec<u64> {
 /// (count and CRC-32), the plan's expectations (frames, corrupted beams, no wrong beam, every
 /// scan's best pose near its logged pose) and the host's recomputation to the printed digits,
 /// and with `count` the instructions per received byte of decode + assembly.
-pub fn lidar(count: bool) -> Result {
+/// With `split` (implies `count`), the firmware also counts a second decoder alone over the
+/// same bytes.
+pub fn lidar(count: bool, split: bool) -> Result {
     ensure_qemu()?;
-    let elf = build()?;
+    let count = count || split;
+    let elf = build(split)?;
     let plan = crate::lidar_ref::stream()?;
     let stream = &plan.bytes;
     eprintln!(
@@ -371,7 +377,7 @@ pub fn lidar(count: bool) -> Result {
                 counts.len()
             ));
         }
-        per_byte(&run.stdout, &counts, stream.len())?;
+        per_byte(&run.stdout, &counts, stream.len(), split)?;
     }
     Ok(())
 }
@@ -381,10 +387,12 @@ fn between<'a>(line: &'a str, key: &str) -> Option<&'a str> {
     line.find(key).map(|i| &line[i + key.len()..])
 }
 
-/// Splits the plugin's regions into decode + assembly and the CRC baseline, following the
-/// firmware's `chunk` lines (each chunk: one decode region per finished scan plus one, then
-/// the CRC region; at the end, the assembler's finish), and prints the per-byte figures.
-fn per_byte(out: &str, counts: &[u64], bytes: usize) -> Result {
+/// Splits the plugin's regions into decode + assembly, decode alone (with `split`) and the CRC
+/// baseline, following the firmware's `chunk` lines (each chunk: one decode + assembly region
+/// per finished scan plus one, then with `split` the decoder alone, then the CRC; at the end,
+/// the assembler's finish), and prints the per-byte figures.
+fn per_byte(out: &str, counts: &[u64], bytes: usize, split: bool) -> Result {
+    let extra = usize::from(split);
     let chunks: Vec<(u64, usize)> = out
         .lines()
         .filter_map(|l| {
@@ -396,18 +404,21 @@ fn per_byte(out: &str, counts: &[u64], bytes: usize) -> Result {
             Some((n, s))
         })
         .collect();
-    let want: usize = chunks.iter().map(|&(_, s)| s + 2).sum::<usize>() + 1;
+    let want: usize = chunks.iter().map(|&(_, s)| s + 2 + extra).sum::<usize>() + 1;
     if counts.len() != want {
         return Err(format!(
             "the firmware's chunk lines call for {want} counted regions, the plugin reported {}",
             counts.len()
         ));
     }
-    let (mut decode, mut crc) = (0u64, 0u64);
+    let (mut decode, mut alone, mut crc) = (0u64, 0u64, 0u64);
     let mut it = counts.iter();
     for &(_, s) in &chunks {
         for _ in 0..=s {
             decode += it.next().copied().unwrap_or(0);
+        }
+        if split {
+            alone += it.next().copied().unwrap_or(0);
         }
         crc += it.next().copied().unwrap_or(0);
     }
@@ -419,8 +430,16 @@ fn per_byte(out: &str, counts: &[u64], bytes: usize) -> Result {
         ));
     }
     let b = bytes as f64;
+    let split_note = if split {
+        format!(
+            ", of which the decoder alone {:.1} (a second decoder over the same bytes; this build's inlining differs from the default one's)",
+            alone as f64 / b
+        )
+    } else {
+        String::new()
+    };
     println!(
-        "instructions (QEMU plugin, exact): LD06 decode + scan assembly {decode} for {bytes} received bytes = {:.1} per byte ({:.2}x the same run's table-driven CRC-32 over the same bytes, {:.1} per byte); receiving and scoring not counted",
+        "instructions (QEMU plugin, exact): LD06 decode + scan assembly {decode} for {bytes} received bytes = {:.1} per byte{split_note}; {:.2}x the same run's table-driven CRC-32 over the same bytes ({:.1} per byte); receiving and scoring not counted",
         decode as f64 / b,
         decode as f64 / crc as f64,
         crc as f64 / b

@@ -15,8 +15,9 @@
 //! scan closes the counted region and is then scored (`lidar_plan.rs`, shared with the host's
 //! recomputation): the demo's tempered likelihood field at every pose of its coarse grid around
 //! the scan's logged pose, and compared beam by beam with the log's ranges (the demo's assets
-//! hold the same 8 scans the host encoded). After each chunk, the CRC-32 of the chunk is counted
-//! as a baseline. At the end: the assembler's pending revolution, the decoder's and the
+//! hold the same 8 scans the host encoded). After each chunk, with the feature `decode-split`, a
+//! second decoder alone goes over the chunk (to split the cost between decoding and assembly),
+//! then the chunk's CRC-32 is counted as a baseline. At the end: the assembler's pending revolution, the decoder's and the
 //! assembler's counters, and the byte count and CRC-32 of everything received, which the host
 //! compares with what it sent.
 //!
@@ -131,6 +132,10 @@ fn main() -> ! {
         }
     };
     let mut decoder = Ld06Decoder::new();
+    #[cfg(feature = "decode-split")]
+    let mut decode_only = Ld06Decoder::new();
+    #[cfg(feature = "decode-split")]
+    let mut decode_only_points = 0u32;
     let mut weights = [0.0f32; POSES];
     let mut rx = match UsartRx::new(dp.USART1, &dp.RCC, &dp.GPIOA, LD06_CONFIG) {
         Ok(rx) => rx,
@@ -200,6 +205,19 @@ fn main() -> ! {
             ok &= report(scans, &setup, &assembler, &mut weights);
             scans += 1;
         }
+        // With the feature `decode-split`: the decoder alone over the same bytes (a second
+        // decoder, whose points are only counted), to split the cost between decoding and
+        // assembly. Off by default: the second caller changes what the compiler inlines into
+        // the main path, and so its count.
+        #[cfg(feature = "decode-split")]
+        {
+            bench_mark_start();
+            for &b in chunk.iter() {
+                decode_only.push_byte(b, &mut |_| decode_only_points += 1);
+            }
+            bench_mark_end();
+            regions += 1;
+        }
         // The baseline of the same run: a table-driven CRC-32 over the same bytes.
         bench_mark_start();
         digest.update(chunk);
@@ -224,6 +242,11 @@ fn main() -> ! {
         scans += 1;
     }
     let d = decoder.stats();
+    #[cfg(feature = "decode-split")]
+    if decode_only.stats() != d || decode_only_points != d.points {
+        println!("lidar_uart: the second decoder disagrees with the first");
+        ok = false;
+    }
     println!(
         "decoder: {} bytes, {} frames ok, {} bad checksums, {} bad frames, {} bytes skipped in {} resyncs, {} points",
         d.bytes, d.frames_ok, d.bad_checksum, d.bad_frames, d.skipped_bytes, d.resyncs, d.points
