@@ -12,6 +12,10 @@
 //! and bytes sent before the receiver is enabled are dropped: the program says it is ready only
 //! after [`UsartRx::new`].
 //!
+//! [`UsartRx`] also implements `embedded_hal_nb::serial::Read<u8>` (with the line errors of SR
+//! reported as overrun, framing, noise or parity errors), so anything written against that trait
+//! can read from it.
+//!
 //! Two ways to wait for a byte: [`UsartRx::read_polling`] spins on RXNE; [`UsartRx::read_wfi`]
 //! sleeps with `wfi` until the USART raises its interrupt line. The interrupt is never *taken*
 //! (it is only used to wake the core): [`UsartRx::enable_wakeup`] masks interrupts with PRIMASK
@@ -174,6 +178,47 @@ impl UsartRx {
         NVIC::mask(Interrupt::USART1);
         self.usart.cr1().write(|w| w.ue().disabled());
         self.usart
+    }
+}
+
+/// A line error the USART flagged in SR (overrun, framing, noise, parity). The byte that came
+/// with it is dropped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LineError(embedded_hal_nb::serial::ErrorKind);
+
+impl embedded_hal_nb::serial::Error for LineError {
+    fn kind(&self) -> embedded_hal_nb::serial::ErrorKind {
+        self.0
+    }
+}
+
+impl embedded_hal_nb::serial::ErrorType for UsartRx {
+    type Error = LineError;
+}
+
+impl embedded_hal_nb::serial::Read<u8> for UsartRx {
+    /// The next byte, `WouldBlock` while none has arrived, or the line error SR reports (the
+    /// SR-then-DR read that returns it also clears it, RM0090 §30.6.1).
+    fn read(&mut self) -> embedded_hal_nb::nb::Result<u8, LineError> {
+        use embedded_hal_nb::serial::ErrorKind;
+        let sr = self.usart.sr().read();
+        let kind = if sr.ore().bit_is_set() {
+            Some(ErrorKind::Overrun)
+        } else if sr.fe().bit_is_set() {
+            Some(ErrorKind::FrameFormat)
+        } else if sr.nf().bit_is_set() {
+            Some(ErrorKind::Noise)
+        } else if sr.pe().bit_is_set() {
+            Some(ErrorKind::Parity)
+        } else {
+            None
+        };
+        if let Some(kind) = kind {
+            let _ = self.usart.dr().read();
+            return Err(embedded_hal_nb::nb::Error::Other(LineError(kind)));
+        }
+        self.try_read()
+            .ok_or(embedded_hal_nb::nb::Error::WouldBlock)
     }
 }
 

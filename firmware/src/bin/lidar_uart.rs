@@ -157,9 +157,16 @@ fn main() -> ! {
         window = [window[1], window[2], window[3], rx.read_wfi()];
         reads += 1;
     }
+    // The length through the driver's embedded-hal-nb interface (polling).
     let mut len = [0u8; 4];
     for b in len.iter_mut() {
-        *b = rx.read_wfi();
+        match embedded_hal_nb::nb::block!(embedded_hal_nb::serial::Read::read(&mut rx)) {
+            Ok(byte) => *b = byte,
+            Err(e) => {
+                println!("lidar_uart: line error in the header: {:?}", e);
+                exit(false)
+            }
+        }
     }
     let total = u32::from_le_bytes(len) as usize;
     println!(
