@@ -1,5 +1,5 @@
-//! Writes the demo firmware's assets (`firmware/assets/intel.bin`, `firmware/assets/scans.rs`)
-//! from the Intel lab log. Run by `cargo xtask demo-assets`.
+//! Writes the demo firmware's assets (`firmware/assets/intel.bin`, `firmware/assets/scans.rs`,
+//! `firmware/assets/lidar_segment.rs`) from the Intel lab log. Run by `cargo xtask demo-assets`.
 //!
 //! Usage: `demo_assets LOG OUT_DIR`.
 
@@ -32,6 +32,7 @@ fn main() -> ExitCode {
         .map_err(|e| format!("{}: {e}", out.display()))
         .and_then(|()| write("intel.bin", &assets.blob))
         .and_then(|()| write("scans.rs", assets.scans_rs.as_bytes()))
+        .and_then(|()| write("lidar_segment.rs", assets.lidar_segment_rs.as_bytes()))
     {
         eprintln!("demo_assets: {e}");
         return ExitCode::FAILURE;
