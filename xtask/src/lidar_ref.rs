@@ -1,5 +1,5 @@
-//! The host side of `cargo xtask lidar`: the LD06 stream sent into the emulated USART (real
-//! Intel-lab scans written by the library's LD06 encoder, with start-up noise and a few
+//! The host side of `cargo xtask lidar`: the LD06 stream sent into the emulated USART (a real
+//! segment of consecutive Intel-lab scans, `firmware/assets/lidar_segment.rs`, written by the library's LD06 encoder, with start-up noise and a few
 //! corrupted frames), what the plan alone says the device must find in it, and the host's
 //! recomputation of the device's report with the same crate and the same plan
 //! (`firmware/src/lidar_plan.rs`, shared word for word with the firmware).
@@ -24,7 +24,13 @@ pub struct DemoScan {
     pub ranges_m: [f32; BEAMS],
 }
 
-include!("../../firmware/assets/scans.rs");
+/// The log's scans sent as the stream (generated; a range of 3.14 m is not π).
+#[allow(clippy::approx_constant)]
+mod segment {
+    use super::DemoScan;
+    include!("../../firmware/assets/lidar_segment.rs");
+}
+use segment::{MAX_RANGE_M, SCANS};
 
 /// Points per LD06 revolution in the stream: one per degree (the encoder's 1° layout).
 const SAMPLES: usize = 360;
@@ -78,7 +84,8 @@ fn beam_at(cw_deg: usize) -> Option<usize> {
     (i < BEAMS).then_some(i)
 }
 
-/// Writes the demo's 8 real scans as LD06 revolutions (one point per degree, clockwise from
+/// Writes the 24 consecutive real scans of `firmware/assets/lidar_segment.rs` (Intel log
+/// FLASER scans 300 … 323) as LD06 revolutions (one point per degree, clockwise from
 /// 0°; no return behind the laser and for the log's max-range readings), with the noise and
 /// the corrupted frames of the plan.
 pub fn stream() -> Result<Stream, String> {
@@ -354,8 +361,8 @@ mod tests {
     #[test]
     fn the_plan_leaves_whole_frames_missing_and_sizes_the_stream() {
         let s = stream().unwrap();
-        // 8 revolutions of 30 frames of 47 bytes, plus the noise.
-        assert_eq!(s.bytes.len(), 8 * 30 * 47 + s.noise);
+        // Revolutions of 30 frames of 47 bytes, plus the noise.
+        assert_eq!(s.bytes.len(), s.scans * 30 * 47 + s.noise);
         assert_eq!(s.missing.iter().filter(|&&m| m > 0).count(), FLIPS.len());
         assert!(s.missing.iter().all(|&m| m <= 12));
     }

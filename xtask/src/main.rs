@@ -126,7 +126,8 @@ enum Task {
     /// netduinoplus2 (STM32F405) and check what the firmware (firmware/src/bin/lidar_uart.rs)
     /// reports.
     ///
-    /// The stream is 8 real Intel-lab scans written as LD06 frames by the library's encoder,
+    /// The stream is 24 consecutive real Intel-lab scans written as LD06 frames by the
+    /// library's encoder,
     /// with line noise and 3 corrupted frames. Builds the program for the STM32F405 layout,
     /// starts QEMU with USART1 on a Unix socket, waits for the firmware's ready line, sends the
     /// stream, and checks the report: every byte received in order (count and CRC-32); the

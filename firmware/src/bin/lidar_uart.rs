@@ -14,8 +14,9 @@
 //! at the centre). Decoding and assembly run between the instruction-count markers; a finished
 //! scan closes the counted region and is then scored (`lidar_plan.rs`, shared with the host's
 //! recomputation): the demo's tempered likelihood field at every pose of its coarse grid around
-//! the scan's logged pose, and compared beam by beam with the log's ranges (the demo's assets
-//! hold the same 8 scans the host encoded). After each chunk, with the feature `decode-split`, a
+//! the scan's logged pose, and compared beam by beam with the log's ranges
+//! (`assets/lidar_segment.rs`: the 24 consecutive scans of the log the host encoded, with their
+//! logged poses). After each chunk, with the feature `decode-split`, a
 //! second decoder alone goes over the chunk (to split the cost between decoding and assembly),
 //! then the chunk's CRC-32 is counted as a baseline. At the end: the assembler's pending revolution, the decoder's and the
 //! assembler's counters, and the byte count and CRC-32 of everything received, which the host
@@ -42,7 +43,7 @@ mod lidar_plan;
 use demo_plan::{offset, POSES};
 use lidar_plan::{Setup, BEAMS};
 
-/// One real scan of the log with its logged (corrected) laser pose (the demo's assets).
+/// One real scan of the log with its logged (corrected) laser pose (`assets/lidar_segment.rs`).
 pub struct DemoScan {
     /// Index of the FLASER line in the log.
     pub log_index: u32,
@@ -52,7 +53,13 @@ pub struct DemoScan {
     pub ranges_m: [f32; BEAMS],
 }
 
-include!("../../assets/scans.rs");
+/// The log's scans sent as the stream (generated; a range of 3.14 m is not π).
+#[allow(clippy::approx_constant)]
+mod segment {
+    use super::DemoScan;
+    include!("../../assets/lidar_segment.rs");
+}
+use segment::{MAX_RANGE_M, SCANS};
 
 /// The 5 cm distance field of the Intel map (the demo's).
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
