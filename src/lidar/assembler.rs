@@ -67,6 +67,9 @@ pub struct AssemblerConfig {
     pub max_range_m: f32,
     /// Points whose quality (protocol units) is below this are rejected.
     pub min_quality: u16,
+    /// The point timestamps wrap to 0 at this many milliseconds (LD06: 30,000; a caller that
+    /// stamps points with its own `u16` millisecond clock: 0, meaning 65,536).
+    pub timestamp_wrap_ms: u16,
 }
 
 impl AssemblerConfig {
@@ -76,6 +79,7 @@ impl AssemblerConfig {
             min_range_m: 0.0,
             max_range_m: layout.max_range_m(),
             min_quality: 0,
+            timestamp_wrap_ms: super::ld06::TIMESTAMP_WRAP_MS,
         }
     }
 }
@@ -106,6 +110,9 @@ pub struct AssemblerStats {
     pub replaced: u32,
     /// Scans emitted.
     pub revolutions: u32,
+    /// Whole turns that went by without a single point (data lost across the wrap for longer
+    /// than a turn, detected from the timestamps).
+    pub missed_revolutions: u32,
 }
 
 /// What is known about the last emitted revolution.
@@ -128,21 +135,23 @@ pub struct Revolution {
 #[derive(Clone, Debug)]
 pub struct ScanAssembler<const N: usize> {
     config: AssemblerConfig,
-    beams: usize,
-    /// Layout start, degrees counter-clockwise, in `[0, 360)`.
-    first_deg: f32,
-    /// Beams per degree.
-    inv_step: f32,
-    /// Beam steps in a full turn.
-    steps_per_turn: f32,
+    bins: Bins,
     /// The pending revolution's ranges and each one's distance to its beam, in steps.
     bins_m: [f32; N],
     offsets: [f32; N],
     filled: u16,
     rev_points: u32,
-    rev_start_ms: Option<u16>,
-    rev_end_ms: Option<u16>,
+    /// Angle and timestamp of the previous point.
     prev_angle_deg: f32,
+    prev_ms: Option<u16>,
+    /// Rotor position within the pending revolution, degrees clockwise from the sensor's 0°
+    /// (slightly negative after a backward jitter across 0°).
+    pos_deg: f32,
+    /// Position and timestamp of the pending revolution's first and last timestamped points.
+    rev_first: Option<(f32, u16)>,
+    rev_last: Option<(f32, u16)>,
+    /// Rotation rate learnt from the last whole revolution, degrees per millisecond.
+    rate_deg_per_ms: Option<f32>,
     out: Scan<N>,
     last: Revolution,
     next_index: u32,
@@ -159,51 +168,25 @@ impl<const N: usize> ScanAssembler<N> {
         if !(config.min_range_m >= 0.0 && config.max_range_m >= config.min_range_m) {
             return Err(AssemblerError::BadRange);
         }
-        let beams = layout.beams();
-        let first_rad = beams.first().map_or(0.0, |b| b.bearing_rad);
-        let step_rad = match beams {
-            [a, b, ..] => b.bearing_rad - a.bearing_rad,
-            // One beam: a full-turn bin.
-            _ => core::f32::consts::TAU,
-        };
-        if step_rad.is_nan() || step_rad <= 0.0 {
-            return Err(AssemblerError::NotUniform(1));
-        }
-        for (i, b) in beams.iter().enumerate() {
-            let want = first_rad + step_rad * i as f32;
-            if (b.bearing_rad - want).abs() > 1e-4 {
-                return Err(AssemblerError::NotUniform(i));
-            }
-        }
-        let step_deg = step_rad.to_degrees();
-        if step_deg * beams.len() as f32 > 360.0 + 1e-3 {
-            return Err(AssemblerError::MoreThanOneTurn);
-        }
-        let mut first_deg = first_rad.to_degrees() % 360.0;
-        if first_deg < 0.0 {
-            first_deg += 360.0;
-        }
-        if first_deg >= 360.0 {
-            first_deg = 0.0;
-        }
+        let bins = Bins::new(layout)?;
         let mut out = Scan::default();
-        for _ in 0..beams.len() {
+        for _ in 0..bins.beams {
             // Capacity N ≥ beams.len(): cannot fail.
             let _ = out.push(f32::NAN);
         }
         Ok(Self {
             config,
-            beams: beams.len(),
-            first_deg,
-            inv_step: 1.0 / step_deg,
-            steps_per_turn: 360.0 / step_deg,
+            bins,
             bins_m: [f32::NAN; N],
             offsets: [f32::INFINITY; N],
             filled: 0,
             rev_points: 0,
-            rev_start_ms: None,
-            rev_end_ms: None,
             prev_angle_deg: f32::NAN,
+            prev_ms: None,
+            pos_deg: 0.0,
+            rev_first: None,
+            rev_last: None,
+            rate_deg_per_ms: None,
             out,
             last: Revolution::default(),
             next_index: 0,
@@ -211,8 +194,8 @@ impl<const N: usize> ScanAssembler<N> {
         })
     }
 
-    /// Adds one point. Returns the finished scan when this point's angle wrapped (the point
-    /// itself then opens the next revolution).
+    /// Adds one point. Returns the finished scan when this point opened a new revolution (the
+    /// point itself belongs to the new one).
     #[inline]
     pub fn push(&mut self, point: LidarPoint) -> Option<&Scan<N>> {
         bump(&mut self.stats.points);
@@ -221,23 +204,60 @@ impl<const N: usize> ScanAssembler<N> {
             bump(&mut self.stats.bad_angle);
             return None;
         }
-        let wrapped = a < self.prev_angle_deg - 180.0;
-        self.prev_angle_deg = a;
-        if wrapped {
-            self.close();
+        let turns = self.advance(a, point.timestamp_ms);
+        if turns > 0 {
+            self.close(turns);
         }
         self.rev_points = self.rev_points.saturating_add(1);
-        if self.rev_start_ms.is_none() {
-            self.rev_start_ms = point.timestamp_ms;
-        }
-        if point.timestamp_ms.is_some() {
-            self.rev_end_ms = point.timestamp_ms;
+        if let Some(t) = point.timestamp_ms {
+            if self.rev_first.is_none() {
+                self.rev_first = Some((self.pos_deg, t));
+            }
+            self.rev_last = Some((self.pos_deg, t));
         }
         self.bin(&point, a);
-        if wrapped {
+        if turns > 0 {
             Some(&self.out)
         } else {
             None
+        }
+    }
+
+    /// Moves the rotor to angle `a` (stamped `t`), returns how many times it crossed 0°.
+    ///
+    /// The advance from the previous point is the signed angle difference in `(−180°, 180°]`;
+    /// when both points carry timestamps and a rotation rate is known, whole turns are added so
+    /// that the advance is the one nearest to `rate · Δt` (data lost for more than half a turn
+    /// cannot hide a wrap).
+    #[inline(always)]
+    fn advance(&mut self, a: f32, t: Option<u16>) -> u32 {
+        let prev = core::mem::replace(&mut self.prev_angle_deg, a);
+        let prev_ms = core::mem::replace(&mut self.prev_ms, t);
+        if prev.is_nan() {
+            self.pos_deg = a;
+            return 0;
+        }
+        let mut da = a - prev;
+        if da > 180.0 {
+            da -= 360.0;
+        } else if da <= -180.0 {
+            da += 360.0;
+        }
+        if let (Some(t), Some(tp), Some(rate)) = (t, prev_ms, self.rate_deg_per_ms) {
+            let dt = elapsed_ms(tp, t, self.config.timestamp_wrap_ms);
+            // rate·dt − da ≥ −180, so the sum is ≥ 0 and truncation rounds to nearest.
+            let extra = ((rate * dt as f32 - da) * (1.0 / 360.0) + 0.5) as u32;
+            da += 360.0 * extra as f32;
+        }
+        let pos = self.pos_deg + da;
+        // pos − a is a whole number of turns up to rounding: find it (≥ −1 by construction).
+        let k = ((pos - a) * (1.0 / 360.0) + 1.5) as u32;
+        if k >= 1 {
+            self.pos_deg = a;
+            k - 1
+        } else {
+            self.pos_deg = (a - 360.0).max(-180.0);
+            0
         }
     }
 
@@ -255,21 +275,10 @@ impl<const N: usize> ScanAssembler<N> {
             bump(&mut self.stats.low_quality);
             return;
         }
-        // Bearing −a relative to the layout's first beam, brought into [0, 360].
-        let mut rel = -a - self.first_deg; // in (−720, 0]
-        rel += if rel < -360.0 { 720.0 } else { 360.0 };
-        let mut k = rel * self.inv_step;
-        // Just below the first beam (within half a step): measure from it, negatively.
-        if k >= self.steps_per_turn - 0.5 {
-            k -= self.steps_per_turn;
-        }
-        // k ≥ −0.5 here, so truncation is rounding to nearest.
-        let idx = (k + 0.5) as usize;
-        let off = (k - idx as f32).abs();
-        if idx >= self.beams {
+        let Some((idx, off)) = self.bins.nearest(a) else {
             bump(&mut self.stats.outside_layout);
             return;
-        }
+        };
         bump(&mut self.stats.accepted);
         if let (Some(bin), Some(o)) = (self.bins_m.get_mut(idx), self.offsets.get_mut(idx)) {
             if off < *o {
@@ -286,9 +295,20 @@ impl<const N: usize> ScanAssembler<N> {
         }
     }
 
-    /// Moves the pending revolution to the output scan and starts an empty one.
-    fn close(&mut self) {
-        let n = self.beams;
+    /// Moves the pending revolution to the output scan and starts an empty one (`turns` ≥ 1
+    /// crossings of 0° ended it).
+    fn close(&mut self, turns: u32) {
+        if turns == 1 {
+            if let (Some((p0, t0)), Some((p1, t1))) = (self.rev_first, self.rev_last) {
+                let dt = elapsed_ms(t0, t1, self.config.timestamp_wrap_ms);
+                if p1 - p0 >= 180.0 && dt > 0 {
+                    self.rate_deg_per_ms = Some((p1 - p0) / dt as f32);
+                }
+            }
+        } else {
+            self.stats.missed_revolutions = self.stats.missed_revolutions.saturating_add(turns - 1);
+        }
+        let n = self.bins.beams;
         if let (Some(dst), Some(src), Some(offs)) = (
             self.out.ranges_m_mut().get_mut(..n),
             self.bins_m.get_mut(..n),
@@ -302,15 +322,15 @@ impl<const N: usize> ScanAssembler<N> {
             index: self.next_index,
             points: self.rev_points,
             filled: self.filled,
-            start_timestamp_ms: self.rev_start_ms,
-            end_timestamp_ms: self.rev_end_ms,
+            start_timestamp_ms: self.rev_first.map(|(_, t)| t),
+            end_timestamp_ms: self.rev_last.map(|(_, t)| t),
         };
         self.next_index = self.next_index.wrapping_add(1);
         bump(&mut self.stats.revolutions);
         self.filled = 0;
         self.rev_points = 0;
-        self.rev_start_ms = None;
-        self.rev_end_ms = None;
+        self.rev_first = None;
+        self.rev_last = None;
     }
 
     /// Emits the pending revolution, if it received any point (for the end of a recording; a
@@ -320,8 +340,9 @@ impl<const N: usize> ScanAssembler<N> {
         if self.rev_points == 0 {
             return None;
         }
-        self.close();
+        self.close(1);
         self.prev_angle_deg = f32::NAN;
+        self.prev_ms = None;
         Some(&self.out)
     }
 
@@ -356,11 +377,123 @@ impl<const N: usize> ScanAssembler<N> {
         self.offsets.fill(f32::INFINITY);
         self.filled = 0;
         self.rev_points = 0;
-        self.rev_start_ms = None;
-        self.rev_end_ms = None;
+        self.rev_first = None;
+        self.rev_last = None;
         self.prev_angle_deg = f32::NAN;
+        self.prev_ms = None;
+        self.rate_deg_per_ms = None;
         self.stats = AssemblerStats::default();
     }
+}
+
+/// Milliseconds from `from` to `to` on a clock that wraps at `wrap` (0: 65,536). A timestamp
+/// at or past `wrap` (impossible for the sensor) is read on the 65,536 clock.
+fn elapsed_ms(from: u16, to: u16, wrap: u16) -> u32 {
+    let (from, to) = (u32::from(from), u32::from(to));
+    let wrap = if wrap == 0 || from >= u32::from(wrap) || to >= u32::from(wrap) {
+        65_536
+    } else {
+        u32::from(wrap)
+    };
+    if to >= from {
+        to - from
+    } else {
+        to + wrap - from
+    }
+}
+
+/// The geometry of a uniform layout, in degrees, for nearest-beam lookups.
+#[derive(Clone, Copy, Debug)]
+struct Bins {
+    beams: usize,
+    /// Layout start, degrees counter-clockwise, in `[0, 360)`.
+    first_deg: f32,
+    /// Beams per degree.
+    inv_step: f32,
+    /// Beam steps in a full turn.
+    steps_per_turn: f32,
+}
+
+impl Bins {
+    fn new<const N: usize>(layout: &BeamLayout<N>) -> Result<Self, AssemblerError> {
+        let beams = layout.beams();
+        let first_rad = beams.first().map_or(0.0, |b| b.bearing_rad);
+        let step_rad = match beams {
+            [a, b, ..] => b.bearing_rad - a.bearing_rad,
+            // One beam: a full-turn bin.
+            _ => core::f32::consts::TAU,
+        };
+        if step_rad.is_nan() || step_rad <= 0.0 {
+            return Err(AssemblerError::NotUniform(1));
+        }
+        for (i, b) in beams.iter().enumerate() {
+            let want = first_rad + step_rad * i as f32;
+            if (b.bearing_rad - want).abs() > 1e-4 {
+                return Err(AssemblerError::NotUniform(i));
+            }
+        }
+        let step_deg = step_rad.to_degrees();
+        if step_deg * beams.len() as f32 > 360.0 + 1e-3 {
+            return Err(AssemblerError::MoreThanOneTurn);
+        }
+        let mut first_deg = first_rad.to_degrees() % 360.0;
+        if first_deg < 0.0 {
+            first_deg += 360.0;
+        }
+        if first_deg >= 360.0 {
+            first_deg = 0.0;
+        }
+        Ok(Self {
+            beams: beams.len(),
+            first_deg,
+            inv_step: 1.0 / step_deg,
+            steps_per_turn: 360.0 / step_deg,
+        })
+    }
+
+    /// The beam nearest to the clockwise angle `a` (degrees, `[0, 360)`) and the distance to
+    /// it in beam steps (≤ 0.5), or `None` when no beam is within half a step.
+    #[inline(always)]
+    fn nearest(&self, a: f32) -> Option<(usize, f32)> {
+        // Bearing −a relative to the layout's first beam, brought into [0, 360].
+        let mut rel = -a - self.first_deg; // in (−720, 0]
+        rel += if rel < -360.0 { 720.0 } else { 360.0 };
+        let mut k = rel * self.inv_step;
+        // Within half a step below the first beam: measure from it, negatively.
+        if k >= self.steps_per_turn - 0.5 {
+            k -= self.steps_per_turn;
+        }
+        // k ≥ −0.5 here, so truncation is rounding to nearest.
+        let idx = (k + 0.5) as usize;
+        (idx < self.beams).then(|| (idx, (k - idx as f32).abs()))
+    }
+}
+
+/// The inverse of assembly, for encoders and tests: the range a sensor turning clockwise would
+/// report at each of `out.len()` evenly spaced angles (`out[k]` at `k · 360° / out.len()`
+/// clockwise from the sensor's zero direction), read from `scan` on `layout`.
+///
+/// `out[k]` is the reading of the beam nearest to that angle when one lies within half a beam
+/// step (the assembler's binning rule), NaN otherwise (the sensor sees nothing the scan covers).
+/// A scan shorter than the layout reads NaN for its missing beams.
+///
+/// # Errors
+/// As [`ScanAssembler::new`] for the layout.
+pub fn sample_revolution<const N: usize>(
+    layout: &BeamLayout<N>,
+    scan: &Scan<N>,
+    out: &mut [f32],
+) -> Result<(), AssemblerError> {
+    let bins = Bins::new(layout)?;
+    let step_deg = 360.0 / out.len().max(1) as f32;
+    for (k, o) in out.iter_mut().enumerate() {
+        let a = k as f32 * step_deg;
+        *o = bins
+            .nearest(if a < 360.0 { a } else { 0.0 })
+            .and_then(|(i, _)| scan.ranges_m().get(i).copied())
+            .unwrap_or(f32::NAN);
+    }
+    Ok(())
 }
 
 /// The layout the LD06 family reports natively: 360 beams 1° apart, counter-clockwise from the
@@ -404,6 +537,8 @@ mod tests {
         assert!(a.push(pt(0.0, 1.0)).is_none());
         assert!(a.push(pt(1.0, 2.0)).is_none());
         assert!(a.push(pt(90.0, 3.0)).is_none());
+        assert!(a.push(pt(180.0, 5.0)).is_none());
+        assert!(a.push(pt(270.0, 6.0)).is_none());
         assert!(a.push(pt(359.6, 4.0)).is_none()); // 0.4° CCW: beam 0 would be nearer...
         let scan = a.push(pt(0.5, 9.0)).expect("wrap").clone();
         let r = scan.ranges_m();
@@ -413,9 +548,11 @@ mod tests {
         assert_eq!(r[270], 3.0);
         assert!(r[1].is_nan() && r[100].is_nan());
         let s = a.stats();
-        assert_eq!((s.accepted, s.replaced, s.revolutions), (5, 1, 1));
-        assert_eq!(a.revolution().filled, 3);
-        assert_eq!(a.revolution().points, 4);
+        assert_eq!(r[180], 5.0);
+        assert_eq!(r[90], 6.0);
+        assert_eq!((s.accepted, s.replaced, s.revolutions), (7, 1, 1));
+        assert_eq!(a.revolution().filled, 5);
+        assert_eq!(a.revolution().points, 6);
     }
 
     #[test]
@@ -448,6 +585,7 @@ mod tests {
             min_range_m: 0.1,
             max_range_m: 5.0,
             min_quality: 10,
+            timestamp_wrap_ms: 0,
         };
         let mut a = ScanAssembler::new(&layout, cfg).unwrap();
         for i in 0..100_000 {
@@ -471,6 +609,63 @@ mod tests {
         assert_eq!(s.accepted, 20_000);
         assert_eq!(s.bad_angle, 2);
         assert_eq!(a.pending_filled(), 1);
+    }
+
+    /// A 10 Hz rotor (3.6°/ms) seen through points 1° apart stamped with the time they were
+    /// taken; `lost` is a range of point indices that never arrive.
+    fn rotor(
+        a: &mut ScanAssembler<360>,
+        points: core::ops::Range<u32>,
+        lost: core::ops::Range<u32>,
+    ) -> Vec<(u32, Revolution, Vec<f32>)> {
+        let mut out = Vec::new();
+        for k in points {
+            if lost.contains(&k) {
+                continue;
+            }
+            let p = LidarPoint {
+                angle_cw_deg: (k % 360) as f32,
+                range_m: 1.0 + (k / 360) as f32, // the revolution's number, in metres
+                quality: 1,
+                valid: true,
+                timestamp_ms: Some(((k as f32 / 3.6).round() as u32 % 30_000) as u16),
+            };
+            if a.push(p).is_some() {
+                out.push((k, a.revolution(), a.scan().ranges_m().to_vec()));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn data_lost_across_the_wrap_never_mixes_revolutions() {
+        let layout = layout360();
+        let mut a = ScanAssembler::new(&layout, AssemblerConfig::for_layout(&layout)).unwrap();
+        // Revolutions 0..3 whole; then points 3·360+170 .. 4·360+250 are lost: the angle goes
+        // from 169° to 250°, which looks like a forward step within one turn.
+        let got = rotor(&mut a, 0..6 * 360, 3 * 360 + 170..4 * 360 + 250);
+        let ks: Vec<u32> = got.iter().map(|g| g.0).collect();
+        assert_eq!(ks, vec![360, 720, 1080, 4 * 360 + 250, 5 * 360]);
+        for (_, rev, ranges) in &got {
+            let finite: Vec<f32> = ranges.iter().copied().filter(|r| r.is_finite()).collect();
+            assert!(!finite.is_empty());
+            assert!(
+                finite.iter().all(|&r| r == finite[0]),
+                "mixed revolutions in {rev:?}"
+            );
+        }
+        // The revolution cut short by the loss holds its 170 points.
+        assert_eq!(got[3].1.filled, 170);
+        assert_eq!(got[3].1.points, 170);
+        assert_eq!(a.stats().missed_revolutions, 0);
+        // Whole turns lost are counted.
+        let mut b = ScanAssembler::new(&layout, AssemblerConfig::for_layout(&layout)).unwrap();
+        let got = rotor(&mut b, 0..9 * 360, 2 * 360 + 100..5 * 360 + 90);
+        assert_eq!(
+            got.iter().map(|g| g.0).collect::<Vec<_>>(),
+            vec![360, 720, 5 * 360 + 90, 6 * 360, 7 * 360, 8 * 360]
+        );
+        assert_eq!(b.stats().missed_revolutions, 2);
     }
 
     #[test]

@@ -105,6 +105,25 @@ pub struct Ld06Sample {
     pub intensity: u8,
 }
 
+impl Ld06Sample {
+    /// The sample an LD06 would send for a range (metres): the distance rounded to the
+    /// millimetre; 0 ("no measurement") for NaN, negative, or anything that rounds to 0 mm or
+    /// past 65,535 mm.
+    pub fn from_range_m(range_m: f32, intensity: u8) -> Self {
+        let mm = range_m * 1000.0;
+        let distance_mm = if (0.5..65_535.5).contains(&mm) {
+            // In [0.5, 65,535.5): rounds to 1..=65,535.
+            (mm + 0.5) as u16
+        } else {
+            0
+        };
+        Self {
+            distance_mm,
+            intensity: if distance_mm == 0 { 0 } else { intensity },
+        }
+    }
+}
+
 /// One frame's fields, in the protocol's units.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

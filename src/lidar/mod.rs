@@ -5,7 +5,7 @@
 //! such a stream into the crate's [`Scan<N>`](crate::scan::Scan) on a caller's
 //! [`BeamLayout<N>`](crate::scan::BeamLayout) in two independent steps:
 //!
-//! 1. a **decoder** per sensor family ([`ld06`]) is a byte-at-a-time state machine. Feed it any
+//! 1. a **decoder** per sensor family ([`ld06`], [`rplidar`], [`xv11`]) is a byte-at-a-time state machine. Feed it any
 //!    slice of received bytes (an interrupt's byte, a DMA half-buffer) with `feed`; it finds the
 //!    frame header, resynchronises after garbage or lost bytes, verifies the frame's checksum and
 //!    only then hands every point of the frame to the caller's closure as a [`LidarPoint`]. It
@@ -40,7 +40,11 @@
 //! [`Scan`]: crate::scan::Scan
 
 pub mod assembler;
+#[cfg(feature = "hal")]
+pub mod io;
 pub mod ld06;
+pub mod rplidar;
+pub mod xv11;
 
 pub use assembler::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution, ScanAssembler};
 
@@ -122,6 +126,32 @@ impl core::fmt::Display for EncodeError {
 }
 
 impl core::error::Error for EncodeError {}
+
+/// What every decoder of this module does: take bytes one at a time and hand out the points of
+/// frames that passed their checks. Lets adapters and tools work with any of them.
+pub trait StreamDecoder {
+    /// Feeds one byte; `on_point` is called for each point of a frame this byte completed.
+    fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint));
+    /// The decoder's counters.
+    fn stats(&self) -> DecoderStats;
+}
+
+macro_rules! stream_decoder {
+    ($t:ty) => {
+        impl StreamDecoder for $t {
+            #[inline]
+            fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
+                <$t>::push_byte(self, byte, on_point)
+            }
+            fn stats(&self) -> DecoderStats {
+                <$t>::stats(self)
+            }
+        }
+    };
+}
+stream_decoder!(ld06::Ld06Decoder);
+stream_decoder!(rplidar::RplidarDecoder);
+stream_decoder!(xv11::Xv11Decoder);
 
 /// Adds one to a counter, saturating (counters never wrap to a misleading small value).
 #[inline(always)]

@@ -4,6 +4,7 @@
 pub mod beam_fit;
 pub mod calibrate;
 pub mod heat_map;
+pub mod lidar_cmd;
 pub mod overlay;
 pub mod plot;
 pub mod pose_grid;

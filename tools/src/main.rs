@@ -45,6 +45,10 @@ enum Command {
         #[command(subcommand)]
         command: beamfield_tools::carmen_cli::LogCommand,
     },
+    /// LiDAR byte streams: `lidar encode` writes a CARMEN log's scans as an LD06, RPLIDAR or
+    /// XV-11 stream; `lidar decode` decodes a stream into scans and counters.
+    #[command(subcommand)]
+    Lidar(beamfield_tools::lidar_cmd::LidarCommand),
 }
 
 fn main() -> ExitCode {
@@ -96,6 +100,16 @@ fn main() -> ExitCode {
         },
         Command::Map { command } => beamfield_tools::carmen_cli::run_map(command, cli.json),
         Command::Log { command } => beamfield_tools::carmen_cli::run_log(command, cli.json),
+        Command::Lidar(cmd) => match beamfield_tools::lidar_cmd::run(&cmd, cli.json) {
+            Ok(out) => {
+                println!("{out}");
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("beamfield lidar: {e}");
+                ExitCode::FAILURE
+            }
+        },
     }
 }
 

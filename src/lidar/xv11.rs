@@ -1,0 +1,488 @@
+//! Neato XV-11 / Xiaomi LDS02RR packets (firmware 2.4 and later): decoder and encoder.
+//!
+//! Protocol as reverse-engineered and published by the XV-11 hacking community (the "LIDAR
+//! Sensor" page of the xv11hacking wiki, "data format for firmware v2.4"; the same layout is
+//! read by the ROS `xv_11_laser_driver`). A packet is [`PACKET_LEN`] = 22 bytes, multi-byte
+//! fields little-endian:
+//!
+//! | offset | bytes | field |
+//! |---:|---:|---|
+//! | 0 | 1 | start byte [`START`] = `0xFA` |
+//! | 1 | 1 | index `0xA0..=0xF9`: packet `index − 0xA0` of the 90 of a turn |
+//! | 2 | 2 | rotation speed, rpm × 64 |
+//! | 4 | 16 | 4 readings: byte 0–1 = distance mm (14 bits), bit 15 "invalid data", bit 14 "strength warning"; bytes 2–3 = signal strength |
+//! | 20 | 2 | checksum |
+//!
+//! Reading `j` of packet `i` is at `4·i + j` degrees, clockwise (ROS drivers store it at
+//! `359 − angle` in their counter-clockwise scans). When the invalid flag is set the distance
+//! bits carry an error code: such readings are emitted with `valid == false`.
+//!
+//! Checksum ([`checksum`]): read the first 20 bytes as ten little-endian 16-bit words `w`;
+//! `c = 0; for each w: c = 2·c + w` (in 32 bits); then `((c & 0x7FFF) + (c >> 15)) & 0x7FFF`.
+//!
+//! The decoder waits for `0xFA` followed by a valid index byte. After a failed checksum it looks
+//! for the next such pair inside the rejected bytes.
+
+use super::{bump, DecoderStats, EncodeError, LidarPoint};
+
+/// Start byte of a packet.
+pub const START: u8 = 0xFA;
+/// Index byte of the first packet of a turn.
+pub const FIRST_INDEX: u8 = 0xA0;
+/// Packets per turn.
+pub const PACKETS_PER_TURN: usize = 90;
+/// Bytes per packet.
+pub const PACKET_LEN: usize = 22;
+/// Readings per packet.
+pub const READINGS_PER_PACKET: usize = 4;
+/// Largest distance the 14-bit field carries, millimetres.
+pub const MAX_DISTANCE_MM: u16 = 0x3FFF;
+
+/// The packet checksum of the first 20 bytes of `packet` (see the module docs).
+pub fn checksum(packet: &[u8]) -> u16 {
+    let mut c: u32 = 0;
+    for w in packet.get(..20).unwrap_or(&[]).chunks_exact(2) {
+        if let [lo, hi] = *w {
+            c = (c << 1).wrapping_add(u32::from(u16::from_le_bytes([lo, hi])));
+        }
+    }
+    (((c & 0x7FFF) + (c >> 15)) & 0x7FFF) as u16
+}
+
+fn is_index(b: u8) -> bool {
+    (FIRST_INDEX..FIRST_INDEX + PACKETS_PER_TURN as u8).contains(&b)
+}
+
+/// Why a packet was rejected by [`Xv11Packet::parse`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum Xv11Error {
+    /// Fewer than [`PACKET_LEN`] bytes.
+    Truncated(usize),
+    /// No `0xFA` start byte.
+    BadStart,
+    /// The checksum does not match.
+    BadChecksum {
+        /// Checksum carried by the packet.
+        carried: u16,
+        /// Checksum computed over bytes 0..20.
+        computed: u16,
+    },
+    /// An index byte outside `0xA0..=0xF9` (with a good checksum).
+    BadIndex(u8),
+}
+
+impl core::fmt::Display for Xv11Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Truncated(n) => write!(f, "packet truncated at {n} bytes"),
+            Self::BadStart => f.write_str("packet does not start with 0xfa"),
+            Self::BadChecksum { carried, computed } => {
+                write!(
+                    f,
+                    "checksum {carried:#06x} carried, {computed:#06x} computed"
+                )
+            }
+            Self::BadIndex(i) => write!(f, "index byte {i:#04x} outside 0xa0..=0xf9"),
+        }
+    }
+}
+
+impl core::error::Error for Xv11Error {}
+
+/// One reading, as transmitted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Xv11Reading {
+    /// Distance, millimetres (14 bits); an error code when `invalid`.
+    pub distance_mm: u16,
+    /// The sensor could not measure this angle.
+    pub invalid: bool,
+    /// The signal was weaker than expected (the distance is still reported).
+    pub strength_warning: bool,
+    /// Signal strength.
+    pub strength: u16,
+}
+
+impl Xv11Reading {
+    /// The reading an XV-11 would send for a range (metres): the distance rounded to the
+    /// millimetre; NaN, negative, 0 mm and anything past 16,383 mm become an invalid reading
+    /// (error code 0, strength 0).
+    pub fn from_range_m(range_m: f32, strength: u16) -> Self {
+        let mm = range_m * 1000.0;
+        if (0.5..f32::from(MAX_DISTANCE_MM) + 0.5).contains(&mm) {
+            Self {
+                distance_mm: (mm + 0.5) as u16,
+                invalid: false,
+                strength_warning: false,
+                strength,
+            }
+        } else {
+            Self {
+                distance_mm: 0,
+                invalid: true,
+                strength_warning: false,
+                strength: 0,
+            }
+        }
+    }
+}
+
+/// One packet's fields.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Xv11Packet {
+    /// Packet number within the turn, `0..90` (sent as `0xA0 + packet`).
+    pub packet: u8,
+    /// Rotation speed, rpm × 64.
+    pub speed_rpm_q6: u16,
+    /// The four readings, at `4·packet + j` degrees.
+    pub readings: [Xv11Reading; READINGS_PER_PACKET],
+}
+
+impl Xv11Packet {
+    /// Parses and checks one packet: start byte, checksum, index.
+    ///
+    /// # Errors
+    /// [`Xv11Error::Truncated`], [`Xv11Error::BadStart`], [`Xv11Error::BadChecksum`],
+    /// [`Xv11Error::BadIndex`].
+    pub fn parse(bytes: &[u8]) -> Result<Self, Xv11Error> {
+        let b = bytes
+            .get(..PACKET_LEN)
+            .ok_or(Xv11Error::Truncated(bytes.len()))?;
+        let [start, index, s0, s1, body @ .., c0, c1] = b else {
+            return Err(Xv11Error::Truncated(bytes.len()));
+        };
+        if *start != START {
+            return Err(Xv11Error::BadStart);
+        }
+        let carried = u16::from_le_bytes([*c0, *c1]);
+        let computed = checksum(b);
+        if carried != computed {
+            return Err(Xv11Error::BadChecksum { carried, computed });
+        }
+        if !is_index(*index) {
+            return Err(Xv11Error::BadIndex(*index));
+        }
+        let mut readings = [Xv11Reading::default(); READINGS_PER_PACKET];
+        for (r, c) in readings.iter_mut().zip(body.chunks_exact(4)) {
+            if let [d0, d1, s0, s1] = *c {
+                *r = Xv11Reading {
+                    distance_mm: u16::from_le_bytes([d0, d1 & 0x3F]),
+                    invalid: d1 & 0x80 != 0,
+                    strength_warning: d1 & 0x40 != 0,
+                    strength: u16::from_le_bytes([s0, s1]),
+                };
+            }
+        }
+        Ok(Self {
+            packet: index - FIRST_INDEX,
+            speed_rpm_q6: u16::from_le_bytes([*s0, *s1]),
+            readings,
+        })
+    }
+
+    /// Writes the packet, checksum included; returns [`PACKET_LEN`]. Distances are cut to 14
+    /// bits; the packet number is written as `0xA0 + packet` (wrapping, so tests can build bad
+    /// indices).
+    ///
+    /// # Errors
+    /// [`EncodeError::BufferTooSmall`].
+    pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        let given = out.len();
+        let o = out
+            .get_mut(..PACKET_LEN)
+            .ok_or(EncodeError::BufferTooSmall {
+                needed: PACKET_LEN,
+                given,
+            })?;
+        let [s0, s1] = self.speed_rpm_q6.to_le_bytes();
+        if let Some(head) = o.get_mut(..4) {
+            head.copy_from_slice(&[START, FIRST_INDEX.wrapping_add(self.packet), s0, s1]);
+        }
+        if let Some(body) = o.get_mut(4..20) {
+            for (c, r) in body.chunks_exact_mut(4).zip(self.readings.iter()) {
+                let [d0, d1] = (r.distance_mm & 0x3FFF).to_le_bytes();
+                let flags = (u8::from(r.invalid) << 7) | (u8::from(r.strength_warning) << 6);
+                let [t0, t1] = r.strength.to_le_bytes();
+                c.copy_from_slice(&[d0, d1 | flags, t0, t1]);
+            }
+        }
+        let [c0, c1] = checksum(o).to_le_bytes();
+        if let Some(tail) = o.get_mut(20..) {
+            tail.copy_from_slice(&[c0, c1]);
+        }
+        Ok(PACKET_LEN)
+    }
+
+    /// Reading `j` (`< 4`) as a point at `4·packet + j` degrees clockwise.
+    pub fn point(&self, j: usize) -> LidarPoint {
+        let r = self.readings.get(j).copied().unwrap_or_default();
+        let valid = !r.invalid && r.distance_mm != 0;
+        LidarPoint {
+            angle_cw_deg: f32::from(u16::from(self.packet) * 4 + j as u16),
+            range_m: if valid {
+                f32::from(r.distance_mm) * 0.001
+            } else {
+                0.0
+            },
+            quality: r.strength,
+            valid,
+            timestamp_ms: None,
+        }
+    }
+}
+
+/// Bytes of one turn (90 packets).
+pub const REVOLUTION_LEN: usize = PACKETS_PER_TURN * PACKET_LEN;
+
+/// Writes one turn: `readings[a]` at `a` degrees clockwise, 90 packets; returns
+/// [`REVOLUTION_LEN`].
+///
+/// # Errors
+/// [`EncodeError::BufferTooSmall`].
+pub fn encode_revolution(
+    readings: &[Xv11Reading; 360],
+    speed_rpm_q6: u16,
+    out: &mut [u8],
+) -> Result<usize, EncodeError> {
+    if out.len() < REVOLUTION_LEN {
+        return Err(EncodeError::BufferTooSmall {
+            needed: REVOLUTION_LEN,
+            given: out.len(),
+        });
+    }
+    for (p, (chunk, dst)) in readings
+        .chunks_exact(READINGS_PER_PACKET)
+        .zip(out.chunks_exact_mut(PACKET_LEN))
+        .enumerate()
+    {
+        let mut pkt = Xv11Packet {
+            packet: p as u8,
+            speed_rpm_q6,
+            readings: [Xv11Reading::default(); READINGS_PER_PACKET],
+        };
+        pkt.readings.copy_from_slice(chunk);
+        pkt.emit(dst)?;
+    }
+    Ok(REVOLUTION_LEN)
+}
+
+/// Byte-at-a-time XV-11 stream decoder. See the module docs.
+#[derive(Clone, Debug)]
+pub struct Xv11Decoder {
+    buf: [u8; PACKET_LEN],
+    len: usize,
+    skipping: bool,
+    stats: DecoderStats,
+    last_speed_rpm_q6: Option<u16>,
+}
+
+impl Default for Xv11Decoder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Xv11Decoder {
+    /// A decoder waiting for a start byte.
+    pub const fn new() -> Self {
+        Self {
+            buf: [0; PACKET_LEN],
+            len: 0,
+            skipping: false,
+            stats: DecoderStats {
+                bytes: 0,
+                frames_ok: 0,
+                bad_checksum: 0,
+                bad_frames: 0,
+                skipped_bytes: 0,
+                resyncs: 0,
+                points: 0,
+            },
+            last_speed_rpm_q6: None,
+        }
+    }
+
+    /// Feeds received bytes; `on_point` is called for the 4 readings of every packet whose
+    /// checksum passed.
+    pub fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
+        for &b in bytes {
+            self.push_byte(b, &mut on_point);
+        }
+    }
+
+    /// Feeds one byte (see [`Xv11Decoder::feed`]).
+    pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
+        bump(&mut self.stats.bytes);
+        match self.len {
+            0 => {
+                if byte == START {
+                    self.buf[0] = byte;
+                    self.len = 1;
+                } else {
+                    self.skip(1);
+                }
+            }
+            1 => {
+                if is_index(byte) {
+                    self.buf[1] = byte;
+                    self.len = 2;
+                } else {
+                    self.skip(1);
+                    if byte == START {
+                        self.len = 1;
+                    } else {
+                        self.len = 0;
+                        self.skip(1);
+                    }
+                }
+            }
+            n => {
+                if let Some(slot) = self.buf.get_mut(n) {
+                    *slot = byte;
+                }
+                self.len = n + 1;
+                if self.len == PACKET_LEN {
+                    self.complete(on_point);
+                }
+            }
+        }
+    }
+
+    fn skip(&mut self, n: usize) {
+        if !self.skipping {
+            bump(&mut self.stats.resyncs);
+            self.skipping = true;
+        }
+        self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(n as u32);
+    }
+
+    fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
+        match Xv11Packet::parse(&self.buf) {
+            Ok(p) => {
+                self.len = 0;
+                self.skipping = false;
+                bump(&mut self.stats.frames_ok);
+                self.last_speed_rpm_q6 = Some(p.speed_rpm_q6);
+                for j in 0..READINGS_PER_PACKET {
+                    on_point(p.point(j));
+                }
+                self.stats.points = self.stats.points.saturating_add(READINGS_PER_PACKET as u32);
+            }
+            Err(_) => {
+                bump(&mut self.stats.bad_checksum);
+                let rest = self.buf.get(1..).unwrap_or(&[]);
+                let next = rest
+                    .windows(2)
+                    .position(|w| matches!(w, [START, i] if is_index(*i)))
+                    .or_else(|| (rest.last() == Some(&START)).then(|| rest.len() - 1))
+                    .map_or(PACKET_LEN, |p| p + 1);
+                self.skip(next);
+                self.buf.copy_within(next.., 0);
+                self.len = PACKET_LEN - next;
+            }
+        }
+    }
+
+    /// The counters. `bytes == 22 · frames_ok + skipped_bytes +` [`Xv11Decoder::buffered`]
+    /// always holds (an index is checked before the packet is buffered, so `bad_frames` stays 0).
+    pub fn stats(&self) -> DecoderStats {
+        self.stats
+    }
+
+    /// Bytes of a partial packet held.
+    pub fn buffered(&self) -> usize {
+        self.len
+    }
+
+    /// Rotation speed of the last good packet, rpm × 64.
+    pub fn last_speed_rpm_q6(&self) -> Option<u16> {
+        self.last_speed_rpm_q6
+    }
+
+    /// Forgets any partial packet and zeroes the counters.
+    pub fn reset(&mut self) {
+        *self = Self::new();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The checksum as written in the community notes, in u64 (no wrapping to reason about).
+    fn checksum_ref(p: &[u8]) -> u16 {
+        let mut c: u64 = 0;
+        for t in 0..10 {
+            c = (c << 1) + u64::from(p[2 * t]) + (u64::from(p[2 * t + 1]) << 8);
+        }
+        (((c & 0x7FFF) + (c >> 15)) & 0x7FFF) as u16
+    }
+
+    #[test]
+    fn checksum_matches_reference_and_round_trip() {
+        let pkt = Xv11Packet {
+            packet: 37,
+            speed_rpm_q6: 300 * 64,
+            readings: [
+                Xv11Reading {
+                    distance_mm: 1234,
+                    invalid: false,
+                    strength_warning: false,
+                    strength: 500,
+                },
+                Xv11Reading {
+                    distance_mm: 0x35,
+                    invalid: true,
+                    strength_warning: false,
+                    strength: 0,
+                },
+                Xv11Reading {
+                    distance_mm: 16_383,
+                    invalid: false,
+                    strength_warning: true,
+                    strength: 65_535,
+                },
+                Xv11Reading::default(),
+            ],
+        };
+        let mut b = [0u8; 22];
+        pkt.emit(&mut b).unwrap();
+        assert_eq!(&b[..4], &[0xFA, 0xA0 + 37, 0x00, 0x4B]);
+        assert_eq!(&b[4..8], &[0xD2, 0x04, 0xF4, 0x01]);
+        assert_eq!(b[9], 0x80);
+        assert_eq!(b[13], 0x7F);
+        assert_eq!(u16::from_le_bytes([b[20], b[21]]), checksum_ref(&b));
+        assert_eq!(Xv11Packet::parse(&b), Ok(pkt));
+        let p = pkt.point(1);
+        assert!(!p.valid);
+        assert_eq!(pkt.point(2).angle_cw_deg, 150.0);
+        assert!(!pkt.point(3).valid);
+    }
+
+    #[test]
+    fn decoder_resyncs_and_counts() {
+        let readings: [Xv11Reading; 360] =
+            core::array::from_fn(|a| Xv11Reading::from_range_m(0.2 + a as f32 * 0.01, 100));
+        let mut rev = vec![0u8; REVOLUTION_LEN];
+        encode_revolution(&readings, 300 * 64, &mut rev).unwrap();
+        let mut s = vec![0xFA, 0x00, 0x13];
+        s.extend_from_slice(&rev[..100]);
+        s.extend_from_slice(&rev[105..]); // packet 4 loses 5 bytes
+        let mut d = Xv11Decoder::new();
+        let mut pts = Vec::new();
+        d.feed(&s, |p| pts.push(p));
+        let st = d.stats();
+        assert_eq!(st.frames_ok, 89);
+        assert_eq!(st.bad_checksum, 1);
+        assert_eq!(pts.len(), 356);
+        assert!(pts.iter().all(|p| (p.angle_cw_deg as usize) / 4 != 4));
+        assert_eq!(
+            st.bytes as usize,
+            22 * st.frames_ok as usize + st.skipped_bytes as usize + d.buffered()
+        );
+        assert_eq!(d.last_speed_rpm_q6(), Some(19_200));
+    }
+}
