@@ -97,13 +97,8 @@ pub fn stream() -> Result<Stream, String> {
     for (k, scan) in SCANS.iter().enumerate() {
         let samples: Vec<Ld06Sample> = (0..SAMPLES)
             .map(|cw| match beam_at(cw).map(|i| scan.ranges_m[i]) {
-                Some(r) if r < MAX_RANGE_M => {
-                    let mm = (f64::from(r) * 1000.0).round();
-                    Ld06Sample {
-                        distance_mm: mm as u16,
-                        intensity: INTENSITY,
-                    }
-                }
+                // The library's rule: the distance rounded to the millimetre.
+                Some(r) if r < MAX_RANGE_M => Ld06Sample::from_range_m(r, INTENSITY),
                 _ => Ld06Sample::default(),
             })
             .collect();
