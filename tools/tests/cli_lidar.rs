@@ -1,0 +1,176 @@
+//! `beamfield lidar encode` and `beamfield lidar decode`, run as a user would, on the Intel log.
+
+use std::path::PathBuf;
+use std::process::Output;
+
+mod common;
+
+fn beamfield(args: &[&str]) -> Output {
+    common::bin().args(args).output().unwrap()
+}
+
+fn intel() -> String {
+    host_tests::data_dir()
+        .join("laser_intel_lab/intel-corrected.log")
+        .display()
+        .to_string()
+}
+
+fn tmp(name: &str) -> String {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("cli_lidar");
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).display().to_string()
+}
+
+/// The first `n` scans of the log, read independently of the tools' CARMEN reader: FLASER lines,
+/// `FLASER n r0 … r(n−1) …`.
+fn logged_scans(n: usize) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(intel())
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("FLASER "))
+        .take(n)
+        .map(|l| {
+            let t: Vec<&str> = l.split_whitespace().collect();
+            let beams: usize = t[1].parse().unwrap();
+            t[2..2 + beams].iter().map(|v| v.parse().unwrap()).collect()
+        })
+        .collect()
+}
+
+#[test]
+fn encode_then_decode_gives_the_logged_ranges_back() {
+    let want = logged_scans(25);
+    // (format, resolution m, largest distance carried m)
+    for (format, res, max) in [
+        ("ld06", 1e-3, 65.535),
+        ("rplidar", 0.25e-3, 16.38375),
+        ("xv11", 1e-3, 16.383),
+    ] {
+        let stream = tmp(&format!("{format}.bin"));
+        let enc = common::run_json(common::bin().args([
+            "--json",
+            "lidar",
+            "encode",
+            "--log",
+            &intel(),
+            "--format",
+            format,
+            "--scans",
+            "25",
+            "--garbage",
+            "40",
+            "-o",
+            &stream,
+        ]));
+        assert_eq!(enc["revolutions"], 25);
+        assert_eq!(enc["garbage"], 40);
+        let bytes = std::fs::metadata(&stream).unwrap().len();
+        assert_eq!(enc["bytes"], bytes);
+        let png = tmp(&format!("{format}.png"));
+        let dec = common::run_json(common::bin().args([
+            "--json", "lidar", "decode", "--format", format, "--layout", "carmen", "--ranges",
+            &stream, "-o", &png,
+        ]));
+        assert_eq!(dec["decoder"]["skipped_bytes"], 40, "{format}");
+        assert_eq!(dec["decoder"]["bad_checksum"], 0, "{format}");
+        let scans = dec["scans"].as_array().unwrap();
+        assert_eq!(scans.len(), 25, "{format}");
+        for (k, (s, w)) in scans.iter().zip(&want).enumerate() {
+            let got = s["ranges_m"].as_array().unwrap();
+            assert_eq!(got.len(), w.len());
+            for (i, (g, &w)) in got.iter().zip(w).enumerate() {
+                if w >= res / 2.0 && w < max + res / 2.0 {
+                    let g = g.as_f64().unwrap_or(f64::NAN);
+                    assert!(
+                        (g - w).abs() <= res / 2.0 + 1e-6 * w,
+                        "{format} scan {k} beam {i}: {g} vs {w}"
+                    );
+                } else {
+                    assert!(g.is_null(), "{format} scan {k} beam {i}: {g} for {w}");
+                }
+            }
+        }
+        let png = std::fs::read(&png).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+    }
+}
+
+#[test]
+fn corrupted_stream_is_counted_not_trusted() {
+    let stream = tmp("bad.bin");
+    let enc = common::run_json(common::bin().args([
+        "--json",
+        "lidar",
+        "encode",
+        "--log",
+        &intel(),
+        "--format",
+        "ld06",
+        "--scans",
+        "40",
+        "--corrupt",
+        "0.002",
+        "--seed",
+        "9",
+        "-o",
+        &stream,
+    ]));
+    let flipped = enc["corrupted_bytes"].as_u64().unwrap();
+    assert!(flipped > 0);
+    let dec = common::run_json(common::bin().args([
+        "--json", "lidar", "decode", "--format", "ld06", "--layout", "carmen", &stream,
+    ]));
+    let d = &dec["decoder"];
+    let bad = d["bad_checksum"].as_u64().unwrap();
+    // Every flipped byte breaks its frame's CRC (several flips may share one frame).
+    assert!(
+        bad > 0 && bad <= flipped,
+        "{bad} bad frames for {flipped} flips"
+    );
+    // A flip costs at most its own frame (a flipped header byte makes the frame unrecognisable:
+    // its bytes are skipped rather than counted as a bad checksum), never the next one.
+    let ok = d["frames_ok"].as_u64().unwrap();
+    assert!(
+        ok + flipped >= 40 * 30,
+        "{ok} frames ok after {flipped} flips"
+    );
+    assert!(ok + bad <= 40 * 30);
+}
+
+#[test]
+fn errors_are_typed_and_help_explains() {
+    let out = beamfield(&[
+        "lidar",
+        "encode",
+        "--log",
+        &intel(),
+        "--format",
+        "ld06",
+        "--rpm",
+        "0",
+        "-o",
+        &tmp("x.bin"),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--rpm must be in (0, 3000]"), "{err}");
+    let out = beamfield(&[
+        "lidar",
+        "decode",
+        "--format",
+        "xv11",
+        "/nonexistent/stream.bin",
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/stream.bin"));
+    let out = beamfield(&["lidar", "decode", "--format", "pl", "x.bin"]);
+    assert!(!out.status.success());
+    let out = beamfield(&["lidar", "encode", "--help"]);
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        help.contains("clockwise") && help.contains("--corrupt"),
+        "{help}"
+    );
+}
