@@ -405,6 +405,28 @@ fn between<'a>(line: &'a str, key: &str) -> Option<&'a str> {
 /// per finished scan plus one, then with `split` the decoder alone, then the CRC; at the end,
 /// the assembler's finish), and prints the per-byte figures.
 fn per_byte(out: &str, counts: &[u64], bytes: usize, split: bool) -> Result {
+    let (decode, alone, crc) = split_regions(out, counts, bytes, split)?;
+    let b = bytes as f64;
+    let split_note = if split {
+        format!(
+            ", of which the decoder alone {:.1} (a second decoder over the same bytes; this build's inlining differs from the default one's)",
+            alone as f64 / b
+        )
+    } else {
+        String::new()
+    };
+    println!(
+        "instructions (QEMU plugin, exact): LD06 decode + scan assembly {decode} for {bytes} received bytes = {:.1} per byte{split_note}; {:.2}x the same run's table-driven CRC-32 over the same bytes ({:.1} per byte); receiving and scoring not counted",
+        decode as f64 / b,
+        decode as f64 / crc as f64,
+        crc as f64 / b
+    );
+    Ok(())
+}
+
+/// The sums of the counted regions: (decode + assembly, decoder alone, CRC baseline), following
+/// the firmware's `chunk` lines (see [`per_byte`]).
+fn split_regions(out: &str, counts: &[u64], bytes: usize, split: bool) -> Result<(u64, u64, u64)> {
     let extra = usize::from(split);
     let chunks: Vec<(u64, usize)> = out
         .lines()
@@ -442,20 +464,25 @@ fn per_byte(out: &str, counts: &[u64], bytes: usize, split: bool) -> Result {
             "chunk lines add up to {received} bytes, {bytes} were sent"
         ));
     }
-    let b = bytes as f64;
-    let split_note = if split {
-        format!(
-            ", of which the decoder alone {:.1} (a second decoder over the same bytes; this build's inlining differs from the default one's)",
-            alone as f64 / b
-        )
-    } else {
-        String::new()
-    };
-    println!(
-        "instructions (QEMU plugin, exact): LD06 decode + scan assembly {decode} for {bytes} received bytes = {:.1} per byte{split_note}; {:.2}x the same run's table-driven CRC-32 over the same bytes ({:.1} per byte); receiving and scoring not counted",
-        decode as f64 / b,
-        decode as f64 / crc as f64,
-        crc as f64 / b
-    );
-    Ok(())
+    Ok((decode, alone, crc))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::split_regions;
+
+    #[test]
+    fn regions_follow_the_chunk_lines() {
+        let out =
+            "chunk 0: 10 bytes, 1 scans finished\nscan 0 ...\nchunk 1: 5 bytes, 0 scans finished\n";
+        // Chunk 0: decode, decode (a scan closed the first), CRC; chunk 1: decode, CRC; finish.
+        let counts = [100, 200, 7, 50, 3, 4];
+        assert_eq!(split_regions(out, &counts, 15, false), Ok((354, 0, 10)));
+        // With the split, the decoder alone comes before each CRC.
+        let counts = [100, 200, 60, 7, 50, 30, 3, 4];
+        assert_eq!(split_regions(out, &counts, 15, true), Ok((354, 90, 10)));
+        // A region too many or a byte count that disagrees is an error.
+        assert!(split_regions(out, &[1, 2, 3, 4, 5, 6, 7], 15, false).is_err());
+        assert!(split_regions(out, &[100, 200, 7, 50, 3, 4], 16, false).is_err());
+    }
 }
