@@ -239,6 +239,30 @@ impl Ld06Frame {
         }
     }
 
+    /// Hands the 12 points to `on_point`, in order: the same values as [`Ld06Frame::point`],
+    /// with the angle stepped instead of recomputed.
+    #[inline]
+    pub fn points(&self, on_point: &mut impl FnMut(LidarPoint)) {
+        let step = POINTS_PER_FRAME as u32 - 1;
+        let full = u32::from(FULL_TURN_CDEG) * step;
+        let span = u32::from(self.span_cdeg());
+        let mut a = u32::from(self.start_angle_cdeg) * step;
+        let scale = 1.0 / (100.0 * step as f32);
+        for s in &self.samples {
+            on_point(LidarPoint {
+                angle_cw_deg: a as f32 * scale,
+                range_m: f32::from(s.distance_mm) * 0.001,
+                quality: u16::from(s.intensity),
+                valid: s.distance_mm != 0,
+                timestamp_ms: Some(self.timestamp_ms),
+            });
+            a += span;
+            if a >= full {
+                a -= full;
+            }
+        }
+    }
+
     /// Point `i` (`< 12`) of the frame: its angle interpolated between the start and end angles.
     ///
     /// The angle is computed in integers of 1/1,100 degree (`start · 11 + span · i`, reduced
@@ -301,9 +325,28 @@ impl Ld06Decoder {
 
     /// Feeds received bytes; `on_point` is called for each of the 12 points of every frame
     /// whose CRC passed, in order, as soon as the frame's last byte arrives.
+    ///
+    /// Inside a frame the bytes are copied in one block, not pushed one by one: the per-byte work
+    /// is the copy, the CRC and the share of the frame's 12 points.
     pub fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
-        for &b in bytes {
-            self.push_byte(b, &mut on_point);
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            if self.len >= 2 {
+                let take = (FRAME_LEN - self.len).min(rest.len());
+                let (head, tail) = rest.split_at(take);
+                if let Some(dst) = self.buf.get_mut(self.len..self.len + take) {
+                    dst.copy_from_slice(head);
+                }
+                self.stats.bytes = self.stats.bytes.saturating_add(take as u32);
+                self.len += take;
+                rest = tail;
+                if self.len == FRAME_LEN {
+                    self.complete(&mut on_point);
+                }
+            } else if let Some((&b, tail)) = rest.split_first() {
+                self.push_byte(b, &mut on_point);
+                rest = tail;
+            }
         }
     }
 
@@ -362,9 +405,7 @@ impl Ld06Decoder {
                 self.skipping = false;
                 bump(&mut self.stats.frames_ok);
                 self.last = Some(frame);
-                for i in 0..POINTS_PER_FRAME {
-                    on_point(frame.point(i));
-                }
+                frame.points(on_point);
                 self.stats.points = self.stats.points.saturating_add(POINTS_PER_FRAME as u32);
             }
             Err(Ld06Error::AngleOutOfRange) => {
@@ -585,6 +626,36 @@ mod tests {
         );
         for p in &pts {
             assert_eq!(p.timestamp_ms, Some(29_999));
+        }
+    }
+
+    #[test]
+    fn block_feed_equals_byte_feed_and_points_equal_point() {
+        let f = sample_frame();
+        let mut pts = Vec::new();
+        f.points(&mut |p| pts.push(p));
+        assert_eq!(pts, (0..12).map(|i| f.point(i)).collect::<Vec<_>>());
+        let mut frame = [0u8; FRAME_LEN];
+        f.emit(&mut frame).unwrap();
+        let mut stream = vec![0x54, 0x01, 0x54];
+        for _ in 0..5 {
+            stream.extend_from_slice(&frame);
+            stream.extend_from_slice(&frame[..13]);
+        }
+        for piece in [1usize, 2, 5, 46, 47, 48, 1000] {
+            let mut a = Ld06Decoder::new();
+            let mut got = Vec::new();
+            for c in stream.chunks(piece) {
+                a.feed(c, |p| got.push(p));
+            }
+            let mut b = Ld06Decoder::new();
+            let mut want = Vec::new();
+            for &x in &stream {
+                b.push_byte(x, &mut |p| want.push(p));
+            }
+            assert_eq!(got, want, "pieces of {piece}");
+            assert_eq!(a.stats(), b.stats());
+            assert_eq!(a.buffered(), b.buffered());
         }
     }
 

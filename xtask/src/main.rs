@@ -28,7 +28,7 @@ const QEMU_TIMEOUT_S: &str = "120";
 const INSNS_BEAMS: u64 = 360;
 /// What each measured region of `insns.rs` does, in order, and what its count is divided by
 /// (the program prints the divisors on its `insns divisors:` line).
-const INSNS_REGIONS: [(&str, &str); 10] = [
+const INSNS_REGIONS: [(&str, &str); 15] = [
     ("empty loop (sum of ranges)", "beam"),
     ("ln per beam (math::ln)", "beam"),
     ("exp per beam (math::exp)", "beam"),
@@ -40,6 +40,12 @@ const INSNS_REGIONS: [(&str, &str); 10] = [
     ("LF per-pose path (score)", "beam"),
     // Issue 4's race: real scans, real map, z* cast on the device.
     ("beam model + ray cast, Intel", "beam"),
+    // LiDAR streams of the 8 real scans (beamfield::lidar).
+    ("empty loop over LD06 bytes", "byte"),
+    ("LD06 decode", "byte"),
+    ("LD06 decode + assembly", "byte"),
+    ("RPLIDAR decode + assembly", "byte"),
+    ("XV-11 decode + assembly", "byte"),
 ];
 
 type Result<T = ()> = std::result::Result<T, String>;
@@ -513,7 +519,7 @@ fn insns(machine: &str) -> Result {
     }
     let per_beam = |n: u64| n as f64 / INSNS_BEAMS as f64;
     println!(
-        "\ninstructions on {machine} ({FIRMWARE_TARGET}, release); regions 0-3: {INSNS_BEAMS} synthetic beams; 4-9: Intel map and real scans:"
+        "\ninstructions on {machine} ({FIRMWARE_TARGET}, release); regions 0-3: {INSNS_BEAMS} synthetic beams; 4-9: Intel map and real scans; 10-14: LiDAR streams of the real scans:"
     );
     println!(
         "{:<3} {:<34} {:>12} {:>10} {:>10} per",
@@ -553,6 +559,15 @@ fn insns(machine: &str) -> Result {
         "beam model with on-device ray casting (real Intel map and scans): {:.1} instructions per beam (the mixture alone, given z*, on the synthetic scan: {:.1})",
         per(9),
         per_beam(mixture)
+    );
+    println!(
+        "LiDAR streams, instructions per received byte: LD06 decode {:.1}, LD06 decode + assembly {:.1} ({:.1}x the empty byte loop of {:.1}), RPLIDAR {:.1}, XV-11 {:.1}",
+        per(11),
+        per(12),
+        per(12) / per(10),
+        per(10),
+        per(13),
+        per(14)
     );
     Ok(())
 }

@@ -21,6 +21,16 @@
 //!    blob, scoring the 8 real scans (1,440 beams) at their logged poses, with the intrinsics EM
 //!    fitted on that log (constants in the module [`intel`]).
 //!
+//!
+//! Then the LiDAR stream decoders (`beamfield::lidar`), on streams the library's encoders write
+//! (outside the regions) from the 8 real scans, one clockwise revolution of 360 points each,
+//! assembled on the scans' own 180-beam layout; all divided by the bytes of the stream:
+//! 10. empty loop over the LD06 stream's bytes (the loop and load cost alone);
+//! 11. `Ld06Decoder::feed` alone (CRC, 12 points per frame handed to a closure);
+//! 12. LD06 decode plus `ScanAssembler::push` of every point (the firmware's sensor path);
+//! 13. RPLIDAR decode plus assembly;
+//! 14. XV-11 decode plus assembly.
+//!
 //! The last line printed gives each region's divisor (`insns divisors: …`), which
 //! `cargo xtask insns` reads.
 #![no_std]
@@ -91,6 +101,136 @@ fn synthetic(rng: &mut Rng, ranges: &mut [f32; BEAMS], z_star: &mut [f32; BEAMS]
             MAX_RANGE_M * rng.unit()
         };
     }
+}
+
+/// Regions 10–14: the LiDAR decoders and the assembler, per received byte. Returns the bytes of
+/// the three streams, or `None` if an encoder or the layout was rejected. Not inlined.
+#[inline(never)]
+fn lidar_regions() -> Option<[usize; 3]> {
+    use beamfield::lidar::assembler::sample_revolution;
+    use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
+    use beamfield::lidar::rplidar::{self, RplidarDecoder};
+    use beamfield::lidar::xv11::{self, Xv11Decoder, Xv11Reading};
+    use beamfield::lidar::{AssemblerConfig, ScanAssembler};
+    const REVS: usize = REAL_SCANS;
+    const POINTS: usize = 360;
+    let layout = BeamLayout::<{ real::BEAMS }>::uniform(
+        -core::f32::consts::FRAC_PI_2,
+        core::f32::consts::PI / real::BEAMS as f32,
+        real::BEAMS,
+        real::MAX_RANGE_M,
+        SensorMount::CENTERED,
+    )
+    .ok()?;
+    let config = AssemblerConfig::for_layout(&layout);
+    let mut revs = [[0.0f32; POINTS]; REVS];
+    for (rev, s) in revs.iter_mut().zip(real::SCANS.iter()) {
+        let scan = Scan::<{ real::BEAMS }>::from_ranges(&s.ranges_m).ok()?;
+        sample_revolution(&layout, &scan, rev).ok()?;
+    }
+    // One buffer, the largest stream (XV-11: 1,980 bytes per revolution).
+    let mut buf = [0u8; REVS * xv11::REVOLUTION_LEN];
+
+    // LD06 at 10 Hz.
+    let mut n = 0;
+    for (k, rev) in revs.iter().enumerate() {
+        let samples = rev.map(|r| Ld06Sample::from_range_m(r, 200));
+        n += ld06::encode_revolution(&samples, 3600, (k * 100) as u16, buf.get_mut(n..)?).ok()?;
+    }
+    let ld06_len = n;
+    let stream = black_box(buf.get(..n)?);
+    bench_mark_start();
+    let mut sum = 0u32;
+    for &b in stream {
+        sum = sum.wrapping_add(u32::from(b));
+    }
+    bench_mark_end();
+    let sum = black_box(sum);
+    bench_mark_start();
+    let mut dec = Ld06Decoder::new();
+    let mut pts = 0u32;
+    dec.feed(stream, |p| {
+        black_box(p);
+        pts += 1;
+    });
+    bench_mark_end();
+    bench_mark_start();
+    let mut dec = Ld06Decoder::new();
+    let mut asm = ScanAssembler::new(&layout, config).ok()?;
+    let mut ld06_scans = 0u32;
+    dec.feed(stream, |p| {
+        if let Some(s) = asm.push(p) {
+            black_box(s);
+            ld06_scans += 1;
+        }
+    });
+    bench_mark_end();
+    let ld06_accepted = asm.stats().accepted;
+
+    // RPLIDAR: the scan descriptor, then nodes.
+    let mut n = 0;
+    buf.get_mut(..rplidar::DESCRIPTOR_LEN)?
+        .copy_from_slice(&rplidar::SCAN_DESCRIPTOR);
+    n += rplidar::DESCRIPTOR_LEN;
+    for rev in &revs {
+        n += rplidar::encode_revolution(rev, 47, buf.get_mut(n..)?).ok()?;
+    }
+    let rp_len = n;
+    let stream = black_box(buf.get(..n)?);
+    bench_mark_start();
+    let mut dec = RplidarDecoder::new();
+    let mut asm = ScanAssembler::new(&layout, config).ok()?;
+    let mut rp_scans = 0u32;
+    dec.feed(stream, |p| {
+        if let Some(s) = asm.push(p) {
+            black_box(s);
+            rp_scans += 1;
+        }
+    });
+    bench_mark_end();
+    let rp_accepted = asm.stats().accepted;
+
+    // XV-11 at 300 rpm.
+    let mut n = 0;
+    for rev in &revs {
+        let readings: [Xv11Reading; POINTS] = core::array::from_fn(|a| {
+            Xv11Reading::from_range_m(rev.get(a).copied().unwrap_or(f32::NAN), 1000)
+        });
+        n += xv11::encode_revolution(&readings, 300 * 64, buf.get_mut(n..)?).ok()?;
+    }
+    let xv_len = n;
+    let stream = black_box(buf.get(..n)?);
+    bench_mark_start();
+    let mut dec = Xv11Decoder::new();
+    let mut asm = ScanAssembler::new(&layout, config).ok()?;
+    let mut xv_scans = 0u32;
+    dec.feed(stream, |p| {
+        if let Some(s) = asm.push(p) {
+            black_box(s);
+            xv_scans += 1;
+        }
+    });
+    bench_mark_end();
+    let xv_accepted = asm.stats().accepted;
+
+    println!(
+        "insns: lidar: {} real scans as revolutions of {} points; byte sum {}; ld06 {} bytes, {} points, {} scans, {} ranges binned; rplidar {} bytes, {} scans, {} binned; xv11 {} bytes, {} scans, {} binned",
+        REVS, POINTS, sum, ld06_len, pts, ld06_scans, ld06_accepted, rp_len, rp_scans, rp_accepted, xv_len, xv_scans, xv_accepted
+    );
+    // Every revolution but the last (no wrap after it) is emitted, and every range a protocol's
+    // distance field carries (counted here from the samples) was binned.
+    let carried = |unit_per_m: f32, max_units: f32| {
+        revs.iter()
+            .flatten()
+            .filter(|&&r| (0.5..max_units + 0.5).contains(&(r * unit_per_m)))
+            .count() as u32
+    };
+    let ok = pts as usize == REVS * POINTS
+        && [ld06_scans, rp_scans, xv_scans] == [REVS as u32 - 1; 3]
+        && ld06_accepted == carried(1000.0, 65_535.0)
+        && rp_accepted == carried(4000.0, 65_535.0)
+        && xv_accepted == carried(1000.0, 16_383.0);
+    ok.then_some([ld06_len, rp_len, xv_len])
 }
 
 /// Region 9's beam model: the intrinsics fitted on the Intel log (the scans and the blob are
@@ -335,10 +475,15 @@ fn main() -> ! {
         race_scored
     );
     let race_ok = race_ll.is_finite() && race_scored == real::SCANS.len() * real::BEAMS;
+    // Regions 10–14: the LiDAR stream decoders.
+    let Some([ld06_len, rp_len, xv_len]) = lidar_regions() else {
+        println!("insns: regions 10-14: a LiDAR encoder, layout or decoded count was wrong");
+        exit(false)
+    };
     // Divisors of each region for `cargo xtask insns`: beams, beam slots, beam evaluations,
     // poses.
     println!(
-        "insns divisors: {} {} {} {} {} {} {} {} {} {}",
+        "insns divisors: {} {} {} {} {} {} {} {} {} {} {} {} {} {} {}",
         BEAMS,
         BEAMS,
         BEAMS,
@@ -348,7 +493,12 @@ fn main() -> ! {
         evaluations,
         REAL_SCANS * POSES_PER_SCAN,
         evaluations,
-        real::SCANS.len() * real::BEAMS
+        real::SCANS.len() * real::BEAMS,
+        ld06_len,
+        ld06_len,
+        ld06_len,
+        rp_len,
+        xv_len
     );
     exit(
         score.log_likelihood.is_finite()
