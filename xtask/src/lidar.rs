@@ -401,9 +401,9 @@ fn between<'a>(line: &'a str, key: &str) -> Option<&'a str> {
 }
 
 /// Splits the plugin's regions into decode + assembly, decode alone (with `split`) and the CRC
-/// baseline, following the firmware's `chunk` lines (each chunk: one decode + assembly region
-/// per finished scan plus one, then with `split` the decoder alone, then the CRC; at the end,
-/// the assembler's finish), and prints the per-byte figures.
+/// baseline, following the firmware's `chunk` lines (each chunk: the decode + assembly region,
+/// then with `split` the decoder alone, then the CRC; at the end, the assembler's finish), and
+/// prints the per-byte figures.
 fn per_byte(out: &str, counts: &[u64], bytes: usize, split: bool) -> Result {
     let (decode, alone, crc) = split_regions(out, counts, bytes, split)?;
     let b = bytes as f64;
@@ -439,7 +439,7 @@ fn split_regions(out: &str, counts: &[u64], bytes: usize, split: bool) -> Result
             Some((n, s))
         })
         .collect();
-    let want: usize = chunks.iter().map(|&(_, s)| s + 2 + extra).sum::<usize>() + 1;
+    let want: usize = chunks.len() * (2 + extra) + 1;
     if counts.len() != want {
         return Err(format!(
             "the firmware's chunk lines call for {want} counted regions, the plugin reported {}",
@@ -448,10 +448,8 @@ fn split_regions(out: &str, counts: &[u64], bytes: usize, split: bool) -> Result
     }
     let (mut decode, mut alone, mut crc) = (0u64, 0u64, 0u64);
     let mut it = counts.iter();
-    for &(_, s) in &chunks {
-        for _ in 0..=s {
-            decode += it.next().copied().unwrap_or(0);
-        }
+    for _ in &chunks {
+        decode += it.next().copied().unwrap_or(0);
         if split {
             alone += it.next().copied().unwrap_or(0);
         }
@@ -475,14 +473,14 @@ mod tests {
     fn regions_follow_the_chunk_lines() {
         let out =
             "chunk 0: 10 bytes, 1 scans finished\nscan 0 ...\nchunk 1: 5 bytes, 0 scans finished\n";
-        // Chunk 0: decode, decode (a scan closed the first), CRC; chunk 1: decode, CRC; finish.
-        let counts = [100, 200, 7, 50, 3, 4];
+        // Per chunk: decode + assembly, then the CRC; at the end, the finish.
+        let counts = [300, 7, 50, 3, 4];
         assert_eq!(split_regions(out, &counts, 15, false), Ok((354, 0, 10)));
         // With the split, the decoder alone comes before each CRC.
-        let counts = [100, 200, 60, 7, 50, 30, 3, 4];
+        let counts = [300, 60, 7, 50, 30, 3, 4];
         assert_eq!(split_regions(out, &counts, 15, true), Ok((354, 90, 10)));
         // A region too many or a byte count that disagrees is an error.
-        assert!(split_regions(out, &[1, 2, 3, 4, 5, 6, 7], 15, false).is_err());
-        assert!(split_regions(out, &[100, 200, 7, 50, 3, 4], 16, false).is_err());
+        assert!(split_regions(out, &[1, 2, 3, 4, 5, 6], 15, false).is_err());
+        assert!(split_regions(out, &[300, 7, 50, 3, 4], 16, false).is_err());
     }
 }

@@ -213,18 +213,15 @@ pub fn reference(bytes: &[u8], blob: &[u8]) -> Result<Reference, String> {
         });
         Ok(())
     };
+    // The whole stream in one `feed` (the device feeds 4 KiB chunks): the results must not
+    // depend on where the chunks end. Each finished scan is scored at once.
     let mut result = Ok(());
-    for &b in bytes {
-        let mut finished = false;
-        decoder.push_byte(b, &mut |p| {
-            if assembler.push(p).is_some() {
-                finished = true;
-            }
-        });
-        if finished {
-            result = result.and_then(|()| one(&assembler, &mut scans));
+    decoder.feed(bytes, |p| {
+        if assembler.push(p).is_some() {
+            result =
+                std::mem::replace(&mut result, Ok(())).and_then(|()| one(&assembler, &mut scans));
         }
-    }
+    });
     if assembler.finish().is_some() {
         result = result.and_then(|()| one(&assembler, &mut scans));
     }

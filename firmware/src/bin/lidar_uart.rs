@@ -11,9 +11,9 @@
 //! The bytes are taken in chunks of up to [`CHUNK`] bytes into RAM (as a DMA or interrupt ring
 //! buffer would hand them over) and pushed through the library's LD06 decoder into a
 //! `ScanAssembler` on the Intel log's layout (180 beams, −90° … +89° counter-clockwise, sensor
-//! at the centre). Decoding and assembly run between the instruction-count markers; a finished
-//! scan closes the counted region and is then scored (`lidar_plan.rs`, shared with the host's
-//! recomputation): the demo's tempered likelihood field at every pose of its coarse grid around
+//! at the centre), a chunk at a time (`Ld06Decoder::feed`). Decoding and assembly run between
+//! the instruction-count markers; the scans finished in the chunk are queued and then scored
+//! (`lidar_plan.rs`, shared with the host's recomputation): the demo's tempered likelihood field at every pose of its coarse grid around
 //! the scan's logged pose, and compared beam by beam with the log's ranges
 //! (`assets/lidar_segment.rs`: the 24 consecutive scans of the log the host encoded, with their
 //! logged poses). After each chunk, with the feature `decode-split`, a
@@ -29,7 +29,7 @@
 
 use beamfield::lidar::ld06::Ld06Decoder;
 use beamfield::lidar::ScanAssembler;
-use beamfield::Pose;
+use beamfield::{Pose, Scan};
 use beamfield_firmware::usart::{UsartRx, LD06_CONFIG};
 use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println, Fixed};
 use cortex_m_rt::entry;
@@ -73,12 +73,7 @@ const CRC32: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Scores and reports the `k`-th assembled scan; false when it could not be (no such scan in
 /// the plan, weights not normalizable) or does not match the log.
-fn report(
-    k: usize,
-    setup: &Setup<'_>,
-    assembler: &ScanAssembler<BEAMS>,
-    weights: &mut [f32; POSES],
-) -> bool {
+fn report(k: usize, setup: &Setup<'_>, done: &Finished, weights: &mut [f32; POSES]) -> bool {
     let Some(demo) = SCANS.get(k) else {
         println!(
             "scan {}: more revolutions than the {} scans sent",
@@ -87,7 +82,7 @@ fn report(
         );
         return false;
     };
-    let scan = assembler.scan();
+    let scan = &done.scan;
     let logged = Pose::new(demo.pose[0], demo.pose[1], demo.pose[2]);
     let m = lidar_plan::compare(scan, &demo.ranges_m, MAX_RANGE_M);
     let scored = match lidar_plan::score(setup, scan, &logged, weights) {
@@ -102,7 +97,7 @@ fn report(
         "scan {} (log line {}): {} points; {} beams valid; vs log: {} match, {} missing, {} wrong; best ({}, {}, {} deg) offset {} cm {} deg; log-likelihood {} ESS {}",
         k,
         demo.log_index,
-        assembler.revolution().points,
+        done.points,
         scored.valid,
         m.matching,
         m.missing,
@@ -118,29 +113,53 @@ fn report(
     m.wrong == 0
 }
 
-/// Pushes bytes from `bytes` through the decoder into the assembler until a scan is finished
-/// (true; the rest of `bytes` is left) or the bytes run out (false).
+/// A scan the assembler finished, kept until it is scored (outside the counted region).
+#[derive(Clone)]
+struct Finished {
+    scan: Scan<BEAMS>,
+    /// Points of its revolution.
+    points: u32,
+}
+
+/// Scans finished within one chunk, in order. A chunk of [`CHUNK`] bytes holds at most three
+/// whole LD06 revolutions of 1,410 bytes; a stream of shorter revolutions (a damaged line
+/// cutting revolutions short) fills the queue and the rest are counted as dropped.
+struct Queue {
+    scans: [Option<Finished>; QUEUE],
+    len: usize,
+    dropped: u32,
+}
+
+/// Scans a chunk can finish before the queue is full.
+const QUEUE: usize = 6;
+
+/// Feeds `chunk` to the decoder (`Ld06Decoder::feed`, the slice interface a DMA or interrupt
+/// buffer uses) and its points to the assembler, queueing every finished scan.
 ///
 /// The counted work, kept out of line so that what the compiler makes of it does not depend on
 /// the rest of `main`.
 #[inline(never)]
-fn decode_until_scan(
+fn decode_chunk(
     decoder: &mut Ld06Decoder,
     assembler: &mut ScanAssembler<BEAMS>,
-    bytes: &mut core::slice::Iter<'_, u8>,
-) -> bool {
-    let mut finished = false;
-    for &b in bytes.by_ref() {
-        decoder.push_byte(b, &mut |p| {
-            if assembler.push(p).is_some() {
-                finished = true;
+    chunk: &[u8],
+    queue: &mut Queue,
+) {
+    decoder.feed(chunk, |p| {
+        if let Some(scan) = assembler.push(p) {
+            let done = Finished {
+                scan: scan.clone(),
+                points: assembler.revolution().points,
+            };
+            match queue.scans.get_mut(queue.len) {
+                Some(slot) => {
+                    *slot = Some(done);
+                    queue.len += 1;
+                }
+                None => queue.dropped += 1,
             }
-        });
-        if finished {
-            break;
         }
-    }
-    finished
+    });
 }
 
 /// The decoder alone over `chunk` (feature `decode-split`): the points it hands over.
@@ -148,9 +167,7 @@ fn decode_until_scan(
 #[inline(never)]
 fn decode_alone(decoder: &mut Ld06Decoder, chunk: &[u8]) -> u32 {
     let mut points = 0u32;
-    for &b in chunk {
-        decoder.push_byte(b, &mut |_| points += 1);
-    }
+    decoder.feed(chunk, |_| points += 1);
     points
 }
 
@@ -186,6 +203,11 @@ fn main() -> ! {
     #[cfg(feature = "decode-split")]
     let mut decode_only_points = 0u32;
     let mut weights = [0.0f32; POSES];
+    let mut queue = Queue {
+        scans: [const { None }; QUEUE],
+        len: 0,
+        dropped: 0,
+    };
     let mut rx = match UsartRx::new(dp.USART1, &dp.RCC, &dp.GPIOA, LD06_CONFIG) {
         Ok(rx) => rx,
         Err(e) => {
@@ -236,21 +258,20 @@ fn main() -> ! {
         for b in chunk.iter_mut() {
             *b = rx.read_wfi();
         }
-        // Decode and assemble between the counting markers; a finished scan ends the region
-        // (it is scored outside it) and the next byte opens a new one.
-        let scans_before = scans;
-        let mut bytes = chunk.iter();
-        loop {
-            bench_mark_start();
-            let finished = decode_until_scan(&mut decoder, &mut assembler, &mut bytes);
-            bench_mark_end();
-            regions += 1;
-            if !finished {
-                break;
+        // Decode and assemble between the counting markers; the scans finished in the chunk
+        // are scored after the region.
+        bench_mark_start();
+        decode_chunk(&mut decoder, &mut assembler, chunk, &mut queue);
+        bench_mark_end();
+        regions += 1;
+        let finished = queue.len;
+        for done in queue.scans.iter_mut().take(finished) {
+            if let Some(done) = done.take() {
+                ok &= report(scans, &setup, &done, &mut weights);
+                scans += 1;
             }
-            ok &= report(scans, &setup, &assembler, &mut weights);
-            scans += 1;
         }
+        queue.len = 0;
         // With the feature `decode-split`: the decoder alone over the same bytes (a second
         // decoder, whose points are only counted), to split the cost between decoding and
         // assembly. Off by default: the second caller changes what the compiler inlines into
@@ -267,12 +288,7 @@ fn main() -> ! {
         crc_chunk(&mut digest, chunk);
         bench_mark_end();
         regions += 1;
-        println!(
-            "chunk {}: {} bytes, {} scans finished",
-            chunks,
-            n,
-            scans - scans_before
-        );
+        println!("chunk {}: {} bytes, {} scans finished", chunks, n, finished);
         done += n;
         chunks += 1;
     }
@@ -282,8 +298,19 @@ fn main() -> ! {
     bench_mark_end();
     regions += 1;
     if last {
-        ok &= report(scans, &setup, &assembler, &mut weights);
+        let done = Finished {
+            scan: assembler.scan().clone(),
+            points: assembler.revolution().points,
+        };
+        ok &= report(scans, &setup, &done, &mut weights);
         scans += 1;
+    }
+    if queue.dropped > 0 {
+        println!(
+            "lidar_uart: {} scans dropped (more than {} finished in one chunk)",
+            queue.dropped, QUEUE
+        );
+        ok = false;
     }
     let d = decoder.stats();
     #[cfg(feature = "decode-split")]
