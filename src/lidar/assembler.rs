@@ -9,7 +9,9 @@
 //!   180° below the previous point's. That point opens the next revolution, so a scan never
 //!   mixes two revolutions. Every point (flagged invalid ones included) moves the rotor angle.
 //!   A stopped motor never wraps and therefore never emits a scan; its points keep replacing
-//!   each other in the bins, in fixed memory. The first revolution after [`ScanAssembler::new`]
+//!   each other in the bins, in fixed memory. (With timestamps, a gap between two points longer
+//!   than half a turn at the learnt rate is read as turns gone by: the revolution is closed, on
+//!   the safe side, even if the motor had in fact stopped during the gap.) The first revolution after [`ScanAssembler::new`]
 //!   or [`ScanAssembler::reset`] is usually partial: its unvisited beams are NaN, like every
 //!   empty bin. [`ScanAssembler::finish`] emits a pending revolution at the end of a recording.
 //! - **Binning.** Each accepted point goes to the beam nearest to its bearing, provided it lies
