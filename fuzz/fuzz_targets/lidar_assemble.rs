@@ -53,7 +53,10 @@ fuzz_target!(|data: &[u8]| {
         if let Some(scan) = asm.push(p) {
             assert_eq!(scan.len(), beams);
             for r in scan.ranges_m() {
-                assert!(r.is_nan() || pushed.iter().any(|q| q.to_bits() == r.to_bits()), "{r}");
+                assert!(
+                    r.is_nan() || pushed.iter().any(|q| q.to_bits() == r.to_bits()),
+                    "{r}"
+                );
             }
             // The point that closed the revolution belongs to the next one.
             pushed.clear();
@@ -63,7 +66,12 @@ fuzz_target!(|data: &[u8]| {
     let s = asm.stats();
     assert_eq!(
         s.points,
-        s.accepted + s.flagged_invalid + s.out_of_range + s.low_quality + s.bad_angle + s.outside_layout
+        s.accepted
+            + s.flagged_invalid
+            + s.out_of_range
+            + s.low_quality
+            + s.bad_angle
+            + s.outside_layout
     );
     if let Some(scan) = asm.finish() {
         assert_eq!(scan.len(), beams);

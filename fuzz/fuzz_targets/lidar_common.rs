@@ -2,14 +2,16 @@
 // of valid frames (checksums recomputed, so mutations reach the frame contents and the
 // assembler) interleaved with raw bytes, then checks what every decoder must guarantee.
 
-use beamfield::lidar::{
-    AssemblerConfig, DecoderStats, LidarPoint, ScanAssembler, StreamDecoder,
-};
+use beamfield::lidar::{AssemblerConfig, DecoderStats, LidarPoint, ScanAssembler, StreamDecoder};
 use beamfield::{BeamLayout, SensorMount};
 
 /// Splits `data` into segments: a tag byte, then either a raw run (tag % 4 == 0, length from the
 /// tag) or `frame_len` bytes handed to `frame` (which returns a whole valid frame).
-pub fn build_stream(data: &[u8], field_len: usize, mut frame: impl FnMut(&[u8]) -> Vec<u8>) -> Vec<u8> {
+pub fn build_stream(
+    data: &[u8],
+    field_len: usize,
+    mut frame: impl FnMut(&[u8]) -> Vec<u8>,
+) -> Vec<u8> {
     let mut out = Vec::new();
     let mut rest = data;
     while let Some((&tag, tail)) = rest.split_first() {
@@ -66,7 +68,10 @@ pub fn check<D: StreamDecoder>(
                 for asm in [&mut a, &mut b] {
                     if let Some(scan) = asm.push(p) {
                         assert_eq!(scan.len(), 360);
-                        assert!(scan.ranges_m().iter().all(|r| r.is_nan() || (*r >= 0.0 && *r <= 20.0)));
+                        assert!(scan
+                            .ranges_m()
+                            .iter()
+                            .all(|r| r.is_nan() || (*r >= 0.0 && *r <= 20.0)));
                     }
                 }
             });
@@ -86,7 +91,12 @@ pub fn check<D: StreamDecoder>(
         assert_eq!(t.points, emitted);
         assert_eq!(
             t.points,
-            t.accepted + t.flagged_invalid + t.out_of_range + t.low_quality + t.bad_angle + t.outside_layout
+            t.accepted
+                + t.flagged_invalid
+                + t.out_of_range
+                + t.low_quality
+                + t.bad_angle
+                + t.outside_layout
         );
     }
 }

@@ -21,7 +21,10 @@ fuzz_target!(|data: &[u8]| {
             // Now and then a response to another request in the middle of the stream.
             0 => {
                 let mut out = vec![0u8; 27];
-                let info = rplidar::DeviceInfo { model: get(1), ..Default::default() };
+                let info = rplidar::DeviceInfo {
+                    model: get(1),
+                    ..Default::default()
+                };
                 let n = info.emit_response(&mut out).expect("27 bytes");
                 out.truncate(n);
                 out

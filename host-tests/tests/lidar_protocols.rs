@@ -225,8 +225,9 @@ fn config(cases: u32) -> ProptestConfig {
 proptest! {
     #![proptest_config(config(48))]
 
-    /// LD06 and XV-11 (checksummed frames): every emitted point is a point of the clean stream,
-    /// the byte accounting holds, and every scan's beams come from one logged scan.
+    /// LD06 and XV-11 (checksummed frames) under bit flips, inserted and deleted bytes: no panic,
+    /// the byte accounting holds, and (unless a damaged window passed the checksum by chance)
+    /// every scan's beams come from one logged scan.
     #[test]
     fn checksummed_protocols_survive_damage(
         xv11 in any::<bool>(),
@@ -240,15 +241,16 @@ proptest! {
         let bad = apply(&clean, &damages, 0, clean.len());
         let l = carmen_layout(format);
         let d = decode_stream(format, &l, AssemblerConfig::for_layout(&l), &bad).unwrap();
-        for p in points(format, &bad) {
-            prop_assert!(clean_pts.contains(&p), "{:?}: point {:?} not in the clean stream", format, p);
-        }
+        // A window the damage makes look like a frame start passes an LD06 CRC-8 one time in 256
+        // (an XV-11 checksum one time in 32,768) and is emitted: count those points, and ask for
+        // scans from one revolution only when there is none.
+        let bogus = points(format, &bad).iter().filter(|p| !clean_pts.contains(p)).count();
         let s = d.decoder;
         prop_assert_eq!(s.bytes as usize, bad.len());
         let frame = if xv11 { 22 } else { 47 };
         prop_assert!(frame * (s.frames_ok + s.bad_frames) as usize + s.skipped_bytes as usize <= bad.len());
         prop_assert!(bad.len() - (frame * (s.frames_ok + s.bad_frames) as usize + s.skipped_bytes as usize) < frame);
-        for got in &d.scans {
+        for got in d.scans.iter().filter(|_| bogus == 0) {
             let one = scans.iter().any(|want| {
                 got.iter().zip(want).all(|(&g, &w)| {
                     g.is_nan() || (f64::from(g) - f64::from(w)).abs() <= 0.5e-3 + 1e-5 * f64::from(w)

@@ -245,12 +245,22 @@ impl<const N: usize> ScanAssembler<N> {
         } else if da <= -180.0 {
             da += 360.0;
         }
+        // Points of one frame share a timestamp (Δt = 0 adds no turn): skip the arithmetic.
         if let (Some(t), Some(tp), Some(rate)) = (t, prev_ms, self.rate_deg_per_ms) {
+            if t == tp {
+                return self.settle(a, da);
+            }
             let dt = elapsed_ms(tp, t, self.config.timestamp_wrap_ms);
             // rate·dt − da ≥ −180, so the sum is ≥ 0 and truncation rounds to nearest.
             let extra = ((rate * dt as f32 - da) * (1.0 / 360.0) + 0.5) as u32;
             da += 360.0 * extra as f32;
         }
+        self.settle(a, da)
+    }
+
+    /// Moves the rotor by `da` to angle `a`; returns the crossings of 0°.
+    #[inline(always)]
+    fn settle(&mut self, a: f32, da: f32) -> u32 {
         let pos = self.pos_deg + da;
         // pos − a is a whole number of turns up to rounding: find it (≥ −1 by construction).
         let k = ((pos - a) * (1.0 / 360.0) + 1.5) as u32;

@@ -399,13 +399,30 @@ impl Ld06Decoder {
     }
 
     fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
-        match Ld06Frame::parse_array(&self.buf) {
-            Ok(frame) => {
+        // The header is known good (the decoder only buffers after `0x54 0x2C`): check the CRC
+        // in place, then build the frame once, where it is kept.
+        let crc_ok = crc8(self.buf.get(..FRAME_LEN - 1).unwrap_or(&[])) == self.buf[FRAME_LEN - 1];
+        let parsed = if crc_ok {
+            let prev = self.last.take();
+            let f = self.last.insert(Ld06Frame::fields(&self.buf));
+            if f.start_angle_cdeg < FULL_TURN_CDEG && f.end_angle_cdeg < FULL_TURN_CDEG {
+                Ok(())
+            } else {
+                // `last_frame` keeps the last frame that was accepted.
+                self.last = prev;
+                Err(Ld06Error::AngleOutOfRange)
+            }
+        } else {
+            Err(Ld06Error::BadHeader)
+        };
+        match parsed {
+            Ok(()) => {
                 self.len = 0;
                 self.skipping = false;
                 bump(&mut self.stats.frames_ok);
-                self.last = Some(frame);
-                frame.points(on_point);
+                if let Some(frame) = &self.last {
+                    frame.points(on_point);
+                }
                 self.stats.points = self.stats.points.saturating_add(POINTS_PER_FRAME as u32);
             }
             Err(Ld06Error::AngleOutOfRange) => {
@@ -669,6 +686,15 @@ mod tests {
         let mut n = 0;
         d.feed(&frame, |_| n += 1);
         assert_eq!((n, d.stats().bad_frames, d.stats().frames_ok), (0, 1, 0));
+        // `last_frame` keeps only accepted frames.
+        assert!(d.last_frame().is_none());
+        let good = sample_frame();
+        let mut g = [0u8; FRAME_LEN];
+        good.emit(&mut g).unwrap();
+        d.feed(&g, |_| n += 1);
+        d.feed(&frame, |_| n += 1);
+        assert_eq!(d.last_frame(), Some(&good));
+        assert_eq!(n, 12);
     }
 
     #[test]
