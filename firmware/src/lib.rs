@@ -1,6 +1,7 @@
 //! Support code shared by the on-target programs in `src/bin/`: the reference-case type and its
 //! generated table, a small fixed-point formatter (so no `core::fmt` float code is linked), the
-//! instruction-count markers, and the semihosting exit.
+//! instruction-count markers, the semihosting exit, and the STM32F405 USART receive driver
+//! ([`usart`]).
 //!
 //! Every program here runs under QEMU (`cargo xtask qemu`, `cargo xtask insns`) or on a board
 //! with a debugger that serves semihosting.
@@ -11,6 +12,7 @@
 #[rustfmt::skip]
 pub mod fixed_cases;
 pub mod reference_cases;
+pub mod usart;
 
 use core::fmt;
 use cortex_m_semihosting::debug;

@@ -1,5 +1,6 @@
 //! Writes the demo firmware's assets (`firmware/assets/intel.bin`, the same field tiled as
-//! `firmware/assets/intel-tiled.bin`, `firmware/assets/scans.rs`) from the Intel lab log. Run by `cargo xtask demo-assets`.
+//! `firmware/assets/intel-tiled.bin`, `firmware/assets/scans.rs`,
+//! `firmware/assets/lidar_segment.rs`) from the Intel lab log. Run by `cargo xtask demo-assets`.
 //!
 //! Usage: `demo_assets LOG OUT_DIR`.
 
@@ -35,6 +36,7 @@ fn main() -> ExitCode {
         .and_then(|()| tile_blob(&assets.blob).map_err(|e| format!("tiling the blob: {e}")))
         .and_then(|tiled| write("intel-tiled.bin", &tiled))
         .and_then(|()| write("scans.rs", assets.scans_rs.as_bytes()))
+        .and_then(|()| write("lidar_segment.rs", assets.lidar_segment_rs.as_bytes()))
     {
         eprintln!("demo_assets: {e}");
         return ExitCode::FAILURE;

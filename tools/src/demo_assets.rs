@@ -19,6 +19,9 @@ pub const CELL_M: f64 = 0.05;
 pub const MAX_DIST_M: f32 = 2.0;
 /// Which FLASER scans of the log the demo embeds (0-based), spread over the whole run.
 pub const SCAN_INDICES: [usize; 8] = [50, 163, 276, 389, 502, 615, 728, 841];
+/// The consecutive FLASER scans (0-based) that `cargo xtask lidar` sends to the firmware as an
+/// LD06 stream (`firmware/assets/lidar_segment.rs`): 24 scans of the robot driving.
+pub const LIDAR_SEGMENT: core::ops::Range<usize> = 300..324;
 
 /// The generated files' contents.
 pub struct DemoAssets {
@@ -26,6 +29,8 @@ pub struct DemoAssets {
     pub blob: Vec<u8>,
     /// Rust source defining `SCANS` (ranges, logged pose, log index) and `MAX_RANGE_M`.
     pub scans_rs: String,
+    /// The same for the consecutive scans of [`LIDAR_SEGMENT`].
+    pub lidar_segment_rs: String,
 }
 
 /// Builds the demo assets from the CARMEN log at `log_path`, using `work_dir` for the
@@ -51,6 +56,22 @@ pub fn generate(log_path: &Path, work_dir: &Path) -> Result<DemoAssets, String> 
     let map = load_map(&yaml).map_err(|e| e.to_string())?;
     let blob = build_blob(&map, MAX_DIST_M).map_err(|e| e.to_string())?;
 
+    let scans_rs = scans_source(&log, max_range, SCAN_INDICES.iter().copied())?;
+    let lidar_segment_rs = scans_source(&log, max_range, LIDAR_SEGMENT)?;
+    Ok(DemoAssets {
+        blob,
+        scans_rs,
+        lidar_segment_rs,
+    })
+}
+
+/// Rust source defining `MAX_RANGE_M` and `SCANS`: the log's scans at `indices` with their
+/// logged poses, as `DemoScan` values (a type the including program declares).
+fn scans_source(
+    log: &CarmenLog,
+    max_range: f32,
+    indices: impl ExactSizeIterator<Item = usize>,
+) -> Result<String, String> {
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -65,12 +86,8 @@ pub fn generate(log_path: &Path, work_dir: &Path) -> Result<DemoAssets, String> 
         s,
         "/// Real scans of the log with their logged (corrected) poses."
     );
-    let _ = writeln!(
-        s,
-        "pub static SCANS: [DemoScan; {}] = [",
-        SCAN_INDICES.len()
-    );
-    for &i in &SCAN_INDICES {
+    let _ = writeln!(s, "pub static SCANS: [DemoScan; {}] = [", indices.len());
+    for i in indices {
         let scan = log
             .scans
             .get(i)
@@ -87,5 +104,5 @@ pub fn generate(log_path: &Path, work_dir: &Path) -> Result<DemoAssets, String> 
         let _ = writeln!(s, "        ],\n    }},");
     }
     let _ = writeln!(s, "];");
-    Ok(DemoAssets { blob, scans_rs: s })
+    Ok(s)
 }

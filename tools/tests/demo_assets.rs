@@ -21,6 +21,12 @@ fn checked_in_demo_assets_are_current() {
         scans == fresh.scans_rs,
         "firmware/assets/scans.rs is stale: run `cargo xtask demo-assets`"
     );
+    let segment = std::fs::read_to_string(assets.join("lidar_segment.rs"))
+        .expect("firmware/assets/lidar_segment.rs");
+    assert!(
+        segment == fresh.lidar_segment_rs,
+        "firmware/assets/lidar_segment.rs is stale: run `cargo xtask demo-assets`"
+    );
     // And the blob is one the device accepts.
     let view = beamfield::FieldView::parse(&blob).expect("valid blob");
     assert!(view.width() > 100 && view.height() > 100);

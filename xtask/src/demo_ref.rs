@@ -4,7 +4,7 @@
 
 #[path = "../../firmware/src/demo_plan.rs"]
 #[allow(dead_code)]
-mod demo_plan;
+pub(crate) mod demo_plan;
 
 use beamfield::{
     normalize_log_weights, BeamLayout, FieldView, Lag1, LikelihoodField, LikelihoodParams, Pose,

@@ -4,6 +4,8 @@
 mod budgets;
 mod demo;
 mod demo_ref;
+mod lidar;
+mod lidar_ref;
 mod willow;
 
 use clap::{Parser, Subcommand};
@@ -134,6 +136,28 @@ enum Task {
         #[arg(long)]
         show_failure: bool,
     },
+    /// The sensor path through an emulated peripheral: stream bytes into USART1 of QEMU's
+    /// netduinoplus2 (STM32F405) and check what the firmware (firmware/src/bin/lidar_uart.rs)
+    /// reports.
+    ///
+    /// The stream is 24 consecutive real Intel-lab scans written as LD06 frames by the
+    /// library's encoder,
+    /// with line noise and 3 corrupted frames. Builds the program for the STM32F405 layout,
+    /// starts QEMU with USART1 on a Unix socket, waits for the firmware's ready line, sends the
+    /// stream, and checks the report: every byte received in order (count and CRC-32); the
+    /// host's recomputation (decode, assembly, scores, counters) to the printed digits; what the
+    /// stream's plan says (frames rejected, beams missing, none wrong, best poses near the
+    /// logged ones); and prints the instructions per received byte of decode + assembly (QEMU
+    /// counting plugin, needs gcc and llvm-nm).
+    Lidar {
+        /// Skip the instruction count (no gcc needed).
+        #[arg(long)]
+        no_count: bool,
+        /// Also count the LD06 decoder alone (firmware feature `decode-split`; the extra pass
+        /// changes what is inlined into the main path, so its figure differs a little).
+        #[arg(long, conflicts_with = "no_count")]
+        split: bool,
+    },
     /// Regenerate firmware/assets/ (Intel map blob and scans) from ../shared/data.
     DemoAssets,
     /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
@@ -167,6 +191,7 @@ fn main() -> ExitCode {
         Task::Willow => willow::willow(),
         Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
+        Task::Lidar { no_count, split } => lidar::lidar(!no_count, split),
         Task::DemoAssets => demo::demo_assets(),
         Task::Refcases { check } => refcases(check),
         Task::Modelcases { check } => modelcases(check),
@@ -413,6 +438,22 @@ fn insncount_dir() -> Result<PathBuf> {
             );
         }
     }
+}
+
+/// `llvm-nm` from PATH, else the one of the Rust sysroot (`rustup component add llvm-tools`).
+fn llvm_nm() -> PathBuf {
+    let on_path = Command::new("llvm-nm")
+        .arg("--version")
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if on_path {
+        return PathBuf::from("llvm-nm");
+    }
+    let sysroot = capture(Command::new("rustc").args(["--print", "sysroot"])).unwrap_or_default();
+    let host = capture(Command::new("rustc").args(["--print", "host-tuple"]))
+        .unwrap_or_else(|_| "x86_64-unknown-linux-gnu".to_string());
+    Path::new(sysroot.trim()).join(format!("lib/rustlib/{}/bin/llvm-nm", host.trim()))
 }
 
 fn ensure_llvm_nm() -> Result {
