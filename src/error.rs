@@ -8,9 +8,15 @@
 
 use crate::correlation::CorrelationError;
 use crate::em::EmError;
-use crate::field::{BlobError, EdtError, LikelihoodError};
+use crate::field::{BlobError, EdtError, FreeSpaceError, LikelihoodError};
 use crate::intrinsics::IntrinsicsError;
 use crate::landmark::{IntersectionError, LandmarkError};
+use crate::lidar::assembler::AssemblerError;
+use crate::lidar::ld06::Ld06Error;
+use crate::lidar::rplidar::RplidarError;
+use crate::lidar::xv11::Xv11Error;
+use crate::lidar::EncodeError;
+use crate::mcl::{MclError, MotionError};
 use crate::raycast::RayCastError;
 use crate::scan::ScanError;
 use crate::sonar::{CrosstalkError, FitError, RingError, ScheduleError};
@@ -54,6 +60,22 @@ pub enum Error {
     Crosstalk(CrosstalkError),
     /// A crosstalk probability could not be fitted ([`crate::sonar::fit_constant_q`], [`crate::sonar::fit_gaussian_q`]).
     SonarFit(FitError),
+    /// A free-space section was rejected ([`crate::field::FreeSpace`]).
+    FreeSpace(FreeSpaceError),
+    /// The localizer's configuration or an update was refused ([`crate::mcl`]).
+    Mcl(MclError),
+    /// An odometry step or its noise was rejected ([`crate::mcl::OdometryStep`]).
+    Motion(MotionError),
+    /// A LiDAR revolution could not be encoded ([`crate::lidar`]'s encoders).
+    LidarEncode(EncodeError),
+    /// An LD06 / LD19 frame could not be built ([`crate::lidar::ld06`]).
+    Ld06(Ld06Error),
+    /// An RPLIDAR command or node could not be built or read ([`crate::lidar::rplidar`]).
+    Rplidar(RplidarError),
+    /// An XV-11 packet could not be built ([`crate::lidar::xv11`]).
+    Xv11(Xv11Error),
+    /// A scan assembler could not be set up ([`crate::lidar::ScanAssembler`]).
+    Assembler(AssemblerError),
     /// The fixed-point path was refused ([`crate::fixed_point`]).
     #[cfg(feature = "fixed")]
     Fixed(crate::fixed_point::FixedError),
@@ -84,6 +106,14 @@ impl core::fmt::Display for Error {
             Self::Schedule(e) => write!(f, "sonar schedule: {e}"),
             Self::Crosstalk(e) => write!(f, "sonar crosstalk: {e}"),
             Self::SonarFit(e) => write!(f, "sonar fit: {e}"),
+            Self::FreeSpace(e) => write!(f, "free-space section: {e}"),
+            Self::Mcl(e) => write!(f, "localizer: {e}"),
+            Self::Motion(e) => write!(f, "odometry: {e}"),
+            Self::LidarEncode(e) => write!(f, "lidar encoder: {e}"),
+            Self::Ld06(e) => write!(f, "ld06: {e}"),
+            Self::Rplidar(e) => write!(f, "rplidar: {e}"),
+            Self::Xv11(e) => write!(f, "xv11: {e}"),
+            Self::Assembler(e) => write!(f, "scan assembler: {e}"),
             #[cfg(feature = "fixed")]
             Self::Fixed(e) => write!(f, "fixed point: {e}"),
             #[cfg(feature = "hal")]
@@ -113,6 +143,14 @@ impl core::error::Error for Error {
             Self::Schedule(e) => e,
             Self::Crosstalk(e) => e,
             Self::SonarFit(e) => e,
+            Self::FreeSpace(e) => e,
+            Self::Mcl(e) => e,
+            Self::Motion(e) => e,
+            Self::LidarEncode(e) => e,
+            Self::Ld06(e) => e,
+            Self::Rplidar(e) => e,
+            Self::Xv11(e) => e,
+            Self::Assembler(e) => e,
             #[cfg(feature = "fixed")]
             Self::Fixed(e) => e,
             #[cfg(feature = "hal")]
@@ -154,6 +192,14 @@ from_error! {
     ScheduleError => Schedule,
     CrosstalkError => Crosstalk,
     FitError => SonarFit,
+    FreeSpaceError => FreeSpace,
+    MclError => Mcl,
+    MotionError => Motion,
+    EncodeError => LidarEncode,
+    Ld06Error => Ld06,
+    RplidarError => Rplidar,
+    Xv11Error => Xv11,
+    AssemblerError => Assembler,
     #[cfg(feature = "fixed")] crate::fixed_point::FixedError => Fixed,
     #[cfg(feature = "hal")] crate::sonar::driver::ConfigError => SonarConfig,
 }

@@ -117,6 +117,22 @@ fn every_other_error_type_converts() {
     assert_eq!(check_wrapped(e, "fixed point"), Error::Fixed(e));
     let e = ConfigError::BadAddress(0x03);
     assert_eq!(check_wrapped(e, "sonar driver"), Error::SonarConfig(e));
+    let e = beamfield::field::FreeSpace::parse(&[]).expect_err("an empty section");
+    assert_eq!(check_wrapped(e, "free-space section"), Error::FreeSpace(e));
+    let e = beamfield::mcl::MclError::ZeroParticles;
+    assert_eq!(check_wrapped(e, "localizer"), Error::Mcl(e));
+    let e = beamfield::mcl::MotionError::NonFiniteOdometry;
+    assert_eq!(check_wrapped(e, "odometry"), Error::Motion(e));
+    let e = beamfield::lidar::EncodeError::BadSampleCount(7);
+    assert_eq!(check_wrapped(e, "lidar encoder"), Error::LidarEncode(e));
+    let e = beamfield::lidar::ld06::Ld06Error::BadHeader;
+    assert_eq!(check_wrapped(e, "ld06"), Error::Ld06(e));
+    let e = beamfield::lidar::assembler::AssemblerError::MoreThanOneTurn;
+    assert_eq!(check_wrapped(e, "scan assembler"), Error::Assembler(e));
+    let e = beamfield::lidar::rplidar::RplidarError::BadCheckBit;
+    assert_eq!(check_wrapped(e, "rplidar"), Error::Rplidar(e));
+    let e = beamfield::lidar::xv11::Xv11Error::BadStart;
+    assert_eq!(check_wrapped(e, "xv11"), Error::Xv11(e));
 }
 
 /// The ring driver's bus error keeps its `ErrorKind`; it has no `source` (the bus error itself is
