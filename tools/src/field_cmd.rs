@@ -1,6 +1,6 @@
 //! `beamfield field …`: build a distance-field blob from a map, query it, render it.
 
-use crate::map::{load_map, MapError, Occupancy, OccupancyMap};
+use crate::map::{load_map_limited, MapError, Occupancy, OccupancyMap};
 use beamfield::field::{
     edt_scratch_len, emit_blob_from_squared_cells, squared_edt, BlobError, EdtError, EdtScratch,
     FieldHeader, FieldView, DEFAULT_MAX_DIST_M, EDT_INFINITY,
@@ -34,6 +34,10 @@ enum FieldCommand {
         /// Clamp distance d_max in metres (AMCL's laser_likelihood_max_dist).
         #[arg(long = "max-dist", default_value_t = DEFAULT_MAX_DIST_M)]
         max_dist: f32,
+        /// Refuse a map image with more cells than this, checked from the image header before
+        /// decoding (the build needs about 17 bytes per cell at its peak).
+        #[arg(long = "max-cells", default_value_t = crate::map::DEFAULT_MAX_CELLS)]
+        max_cells: u64,
     },
     /// Look up distances: "x,y" lines on stdin, "x,y,distance_m" on stdout.
     ///
@@ -279,9 +283,10 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             map,
             output,
             max_dist,
+            max_cells,
         } => {
             let t0 = Instant::now();
-            let m = load_map(&map).map_err(FieldCmdError::Map)?;
+            let m = load_map_limited(&map, max_cells).map_err(FieldCmdError::Map)?;
             let t1 = Instant::now();
             let blob = build_blob(&m, max_dist)?;
             let t2 = Instant::now();
