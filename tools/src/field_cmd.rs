@@ -35,7 +35,7 @@ enum FieldCommand {
         #[arg(long = "max-dist", default_value_t = DEFAULT_MAX_DIST_M)]
         max_dist: f32,
         /// Refuse a map image with more cells than this, checked from the image header before
-        /// decoding (the build needs about 17 bytes per cell at its peak).
+        /// decoding (the build needs about 10 bytes per cell at its peak).
         #[arg(long = "max-cells", default_value_t = crate::map::DEFAULT_MAX_CELLS)]
         max_cells: u64,
     },

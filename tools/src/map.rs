@@ -141,8 +141,9 @@ pub enum MapError {
 }
 
 /// Default limit on a map's cells, `--max-cells` on the command line: 4096 × 4096 (16.8 M
-/// cells). `field build` needs about 17 bytes per cell at its peak (docs/resource-limits.md),
-/// so the default keeps it under ~300 MB; the Willow Garage map is 5.3 M cells.
+/// cells). `field build` needs about 10 bytes per cell at its peak (measured, see
+/// docs/resource-limits.md), so the default keeps it under ~170 MB; the Willow Garage map is
+/// 1.1 M cells.
 pub const DEFAULT_MAX_CELLS: u64 = 1 << 24;
 
 impl fmt::Display for MapError {
