@@ -85,7 +85,17 @@ fn data_set(seed: u64, n: usize) -> (Vec<f32>, Vec<f32>, BeamIntrinsics) {
 }
 
 /// Mean log-likelihood per beam from the reference, and the mean |ℓ_i|.
+/// The weights are divided by their sum first: that is the likelihood the crate's EM evaluates
+/// (its f32 weights sum to 1 only to ~6e-8; see the em module docs, Precision).
 fn ref_ll(p: &Intrinsics, z: &[f32], zs: &[f32]) -> (f64, f64) {
+    let total: f64 = p.weights().iter().sum();
+    let p = &Intrinsics {
+        z_hit: p.z_hit / total,
+        z_short: p.z_short / total,
+        z_max: p.z_max / total,
+        z_rand: p.z_rand / total,
+        ..*p
+    };
     let (mut sum, mut abs) = (0.0, 0.0);
     for (&a, &b) in z.iter().zip(zs) {
         let l = reference::beam_log_likelihood(p, f64::from(a), f64::from(b)).unwrap();

@@ -1,6 +1,15 @@
 //! The device's ray cast through the blob ([`beamfield::RayCaster`]) against the host's exact
 //! f64 grid traversal (`ray_cast_grid`) on the same occupancy grid: TurtleBot3, Willow Garage
 //! and the Intel lab map built from its log. Prints the error distribution.
+//!
+//! Tolerances, from what is measured (20,000 rays per map, 2026-12-01): the largest error is
+//! 0.002 cell (Intel, Willow), p99.9 ≤ 3.3e-4 cell, and the mean signed error ≤ 1.3e-6 cell;
+//! the exact cast and the device's differ only by the f32 rounding of the start, the direction
+//! and the step arithmetic (an f32 ulp at 20 m is 2e-6 m, 4e-5 of a 5 cm cell, accumulated over
+//! up to a few hundred cell steps). So every ray must be within 0.01 cell (5× the largest
+//! measured) and the mean signed error within 1e-3 cell: a systematic bias of a thousandth of a
+//! cell is a bug, not rounding. The earlier limit of one whole cell let a cast that is half a
+//! cell long on every ray pass.
 
 use beamfield::field::{FieldView, DEFAULT_MAX_DIST_M};
 use beamfield::RayCaster;
@@ -23,7 +32,7 @@ impl Rng {
 }
 
 /// Casts `rays` random rays (start uniform over the map's rectangle, angle uniform, range
-/// limit 12 m) both ways; returns the absolute errors in cells, sorted.
+/// limit 12 m) both ways; returns the signed errors (device − exact) in cells, in ray order.
 fn errors_in_cells(map: &OccupancyMap, rays: usize, seed: u64, min_jump: f32) -> Vec<f64> {
     let blob = build_blob(map, DEFAULT_MAX_DIST_M).unwrap();
     let caster = RayCaster::new(FieldView::parse(&blob).unwrap())
@@ -41,9 +50,8 @@ fn errors_in_cells(map: &OccupancyMap, rays: usize, seed: u64, min_jump: f32) ->
         let a = ((rng.next() * 2.0 - 1.0) * std::f64::consts::PI) as f32;
         let want = ray_cast_grid(map, f64::from(x), f64::from(y), f64::from(a), max_range);
         let got = caster.cast(x, y, a, max_range as f32);
-        errs.push(f64::from((got - want).abs()) / res);
+        errs.push(f64::from(got - want) / res);
     }
-    errs.sort_by(f64::total_cmp);
     errs
 }
 
@@ -52,36 +60,49 @@ fn check(name: &str, map: &OccupancyMap, rays: usize, seed: u64) {
 }
 
 fn check_with(name: &str, map: &OccupancyMap, rays: usize, seed: u64, min_jump: f32) {
-    let e = errors_in_cells(map, rays, seed, min_jump);
+    let signed = errors_in_cells(map, rays, seed, min_jump);
+    let mean_signed = signed.iter().sum::<f64>() / signed.len() as f64;
+    let mut e: Vec<f64> = signed.iter().map(|x| x.abs()).collect();
+    e.sort_by(f64::total_cmp);
+    let over_tight = e.iter().filter(|&&x| x > 0.01).count();
     let q = |p: f64| e[((e.len() - 1) as f64 * p) as usize];
     let over = e.iter().filter(|&&x| x > 1.0).count();
     let exact = e.iter().filter(|&&x| x < 1e-3).count();
     println!(
         "{name} (min jump {min_jump} cells): {rays} rays, errors in cells: median {:.2e}, p99 {:.2e}, p99.9 {:.2e}, max {:.3}; \
-         {exact} within 1e-3 cell, {over} over one cell",
+         {exact} within 1e-3 cell, {over_tight} over 0.01 cell, {over} over one cell; mean signed \
+         error {mean_signed:.2e} cell",
         q(0.5),
         q(0.99),
         q(0.999),
         e[e.len() - 1]
     );
     assert_eq!(over, 0, "{name}: {over} rays off by more than one cell");
+    assert_eq!(
+        over_tight, 0,
+        "{name}: {over_tight} rays off by more than 0.01 cell"
+    );
+    assert!(
+        mean_signed.abs() <= 1e-3,
+        "{name}: mean signed error {mean_signed:.3e} cell (biased casts)"
+    );
 }
 
 #[test]
-fn turtlebot3_within_one_cell() {
+fn turtlebot3_within_a_hundredth_of_a_cell() {
     let m = load_map(&host_tests::data_dir().join("map_turtlebot3_world/map.yaml")).unwrap();
     check("turtlebot3", &m, 20_000, 1);
 }
 
 #[test]
-fn willow_within_one_cell() {
+fn willow_within_a_hundredth_of_a_cell() {
     let m =
         load_map(&host_tests::data_dir().join("map_willow_garage/willow-full-0.05.yaml")).unwrap();
     check("willow", &m, 20_000, 2);
 }
 
 #[test]
-fn intel_within_one_cell() {
+fn intel_within_a_hundredth_of_a_cell() {
     let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
     let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
     let m = map_from_log(&log, log.max_range.value_m().unwrap()).unwrap();

@@ -9,7 +9,8 @@
 //!   underflows. A reading no cause with non-zero weight explains is skipped and counted
 //!   ([`EmCounts::unexplained`]); NaN and negative readings too ([`EmCounts::invalid`]).
 //!   Max-range readings follow the crate's reading policy (see [`crate::scan`]).
-//! - **M-step, weights**: `w_c = (1/n)·Σ_i e_{i,c}` (exact).
+//! - **M-step, weights**: `w_c = (1/n)·Σ_i e_{i,c}`, rounded to f32 (see Precision for how the
+//!   rounded weights are compared and evaluated).
 //! - **M-step, σ and λ**: either [`ShapeUpdate::Textbook`] (Table 6.2's closed forms
 //!   `σ² = Σe_hit·(z−z*)²/Σe_hit`, `λ = Σe_short/Σe_short·z`, which ignore the normalizers
 //!   `η_hit`, `η_short`), or [`ShapeUpdate::Truncated`] (the default): a 1-D maximization of the
@@ -71,6 +72,23 @@
 //! (what [`BeamIntrinsics`] stores), and every candidate is rounded to f32 *before* it is
 //! evaluated and compared, so the returned intrinsics are exactly the ones whose log-likelihood
 //! the trace reports.
+//!
+//! Weights in f32. Four f32 weights rounded from `Σ_i e_{i,c}/n` sum to 1 only to within
+//! `2⁻²⁴ ≈ 6·10⁻⁸` (each is off by at most half an ulp, `≤ 2⁻²⁵·w_c`). The mixture is linear in
+//! the weights, so evaluated with them as stored every reading's log-likelihood would move by
+//! `ln Σw`, a different amount after every M-step, and the weight part of Q,
+//! `Q_w = Σ_c E_c·ln w_c`, by about `n·(Σw − 1)`: late in a fit that exceeds what a genuine
+//! update gains, and comparing `Q_w` on the stored weights refused real updates and froze the
+//! fit early. So the E-step, the log-likelihood and the weight step's acceptance all use the
+//! stored weights divided by their f64 sum. Renormalized, the rounded candidate is within
+//! `2⁻²⁴` relative of the exact maximizer `ŵ = E/n` in every weight, which costs `Q_w` only a
+//! second-order `n·Σ_c ŵ_c·(2⁻²⁴)²/2 < n·10⁻¹⁵` nats, below the f64 rounding of `Q_w` itself, so
+//! a candidate is refused only when it is the old weights to within rounding, and Jensen's
+//! inequality (which the generalized-EM argument rests on) holds for the renormalized weights
+//! exactly. The trace is therefore the log-likelihood of the returned intrinsics with their
+//! weights divided by their sum; with the stored weights as they are (as
+//! [`crate::BeamModel`] evaluates them) it differs by `ln Σw`, at most `6·10⁻⁸` nats per beam.
+//! The responsibilities, and so every update, do not depend on the scaling.
 //!
 //! Rounding bound of the monotonicity: a step is accepted on an f64 comparison of sums of `n`
 //! terms of size `|ℓ|`, each accurate to a few ulp; the computed mean log-likelihood per beam is
@@ -503,7 +521,8 @@ where
             break (StopReason::IterationLimit, st);
         }
 
-        // M-step: weights (exact), accepted only if the f32-rounded result does not lower Q_w.
+        // M-step: weights (exact), accepted only if the f32-rounded result does not lower Q_w,
+        // both compared renormalized, as the E-step uses them (see the module docs, Precision).
         let mut new_w = w;
         for ((nw, e), n) in new_w.iter_mut().zip(&st.e).zip(&st.n) {
             if *n == 0 {
@@ -634,13 +653,14 @@ fn weights_from(e: &[f64; 4], n: u64) -> [f32; 4] {
     out
 }
 
-/// The weight part of Q for one group: `Σ_c e_c·ln w_c` (a term with `e_c = 0` is 0).
+/// The weight part of Q for one group at the weights the E-step uses, `w` renormalized
+/// ([`pass::normalized`]): `Σ_c e_c·ln(w_c/Σw)` (a term with `e_c = 0` is 0).
 fn q_weights(e: &[f64; 4], w: &[f32; 4]) -> f64 {
     e.iter()
-        .zip(w)
-        .map(|(&ec, &wc)| {
+        .zip(pass::normalized(w))
+        .map(|(&ec, wc)| {
             if ec > 0.0 {
-                ec * crate::math::ln_f64(f64::from(wc))
+                ec * crate::math::ln_f64(wc)
             } else {
                 0.0
             }

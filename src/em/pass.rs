@@ -56,19 +56,21 @@ pub(crate) struct Theta<const G: usize> {
 }
 
 impl<const G: usize> Theta<G> {
+    /// The E-step at `w` renormalized to sum to 1 in f64 (see [`normalized`]), `σ`, `λ`, `z_max`.
     pub fn new(w: &[[f32; 4]; G], sigma_m: f32, lambda_per_m: f32, zmax_m: f32) -> Self {
+        let wn = w.map(|g| normalized(&g));
         let mut ln_w = [[0.0f64; 4]; G];
-        for (lg, wg) in ln_w.iter_mut().zip(w) {
+        for (lg, wg) in ln_w.iter_mut().zip(&wn) {
             for (l, &x) in lg.iter_mut().zip(wg) {
-                *l = math::ln_f64(f64::from(x));
+                *l = math::ln_f64(x);
             }
         }
         let sigma = f64::from(sigma_m);
         let lambda = f64::from(lambda_per_m);
         let zmax = f64::from(zmax_m);
         let mut lin_w = [[0.0f64; 4]; G];
-        for (lg, wg) in lin_w.iter_mut().zip(w) {
-            let [wh, ws, wm, wr] = wg.map(f64::from);
+        for (lg, wg) in lin_w.iter_mut().zip(&wn) {
+            let [wh, ws, wm, wr] = *wg;
             *lg = [wh * INV_SQRT_2PI_F64 / sigma, ws * lambda, wm, wr / zmax];
         }
         Self {
@@ -420,6 +422,23 @@ impl<const G: usize> PassStats<G> {
                 }
             }
         }
+    }
+}
+
+/// The f32 weights `w` as f64, divided by their f64 sum (exact: four f32 values sum exactly in
+/// f64 up to one rounding), so that they sum to 1 to f64 rounding. f32 storage leaves the stored
+/// weights' sum off 1 by up to `2⁻²⁴` (each of the four is rounded by at most half an ulp,
+/// `2⁻²⁵·w_c`, relative), and since the mixture is linear in the weights that would shift every
+/// reading's log-likelihood by `ln Σw`, up to `6·10⁻⁸` nats, differently after every M-step:
+/// more than the late EM steps gain. The E-step's responsibilities do not depend on this
+/// scaling; only the log-likelihood does. A zero sum (not on the simplex) is left as it is.
+pub fn normalized(w: &[f32; 4]) -> [f64; 4] {
+    let w = w.map(f64::from);
+    let sum: f64 = w.iter().sum();
+    if sum > 0.0 {
+        w.map(|x| x / sum)
+    } else {
+        w
     }
 }
 

@@ -1,6 +1,6 @@
 //! `beamfield field …`: build a distance-field blob from a map, query it, render it.
 
-use crate::map::{load_map, MapError, Occupancy, OccupancyMap};
+use crate::map::{load_map_limited, MapError, Occupancy, OccupancyMap};
 use beamfield::field::{
     edt_scratch_len, emit_blob_from_squared_cells, emit_blob_tiled, squared_edt, tiled_max_len,
     tiled_scratch_len, BlobError, EdtError, EdtScratch, FieldHeader, FieldView, DEFAULT_MAX_DIST_M,
@@ -64,6 +64,10 @@ enum FieldCommand {
         /// tell which one explains a scan (`beamfield score` with each).
         #[arg(long = "variant", value_name = "MAP.yaml")]
         variants: Vec<PathBuf>,
+        /// Refuse a map image with more cells than this, checked from the image header before
+        /// decoding (the build needs about 10 bytes per cell at its peak).
+        #[arg(long = "max-cells", default_value_t = crate::map::DEFAULT_MAX_CELLS)]
+        max_cells: u64,
     },
     /// Rewrite a blob in another encoding (same header, same codes, so the same scores).
     Encode {
@@ -488,12 +492,18 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             free_space,
             encoding,
             variants,
+            max_cells,
         } => {
             let t0 = Instant::now();
-            let m = load_map(&map).map_err(FieldCmdError::Map)?;
+            let m = load_map_limited(&map, max_cells).map_err(FieldCmdError::Map)?;
             let loaded = variants
                 .iter()
-                .map(|p| Ok((p.clone(), load_map(p).map_err(FieldCmdError::Map)?)))
+                .map(|p| {
+                    Ok((
+                        p.clone(),
+                        load_map_limited(p, max_cells).map_err(FieldCmdError::Map)?,
+                    ))
+                })
                 .collect::<Result<Vec<_>, FieldCmdError>>()?;
             let m = union_map(&m, &loaded)?;
             let t1 = Instant::now();

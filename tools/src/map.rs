@@ -125,7 +125,26 @@ pub enum MapError {
     UnsupportedMode(String),
     /// The image is empty.
     EmptyImage(PathBuf),
+    /// The image path is not a regular file (a device, a FIFO, a directory).
+    NotAFile(PathBuf),
+    /// The image header announces more cells than the limit (checked before decoding).
+    TooLarge {
+        /// The image file.
+        path: PathBuf,
+        /// Width from the image header, pixels.
+        width: u32,
+        /// Height from the image header, pixels.
+        height: u32,
+        /// The limit, cells.
+        max_cells: u64,
+    },
 }
+
+/// Default limit on a map's cells, `--max-cells` on the command line: 4096 × 4096 (16.8 M
+/// cells). `field build` needs about 10 bytes per cell at its peak (measured, see
+/// docs/resource-limits.md), so the default keeps it under ~170 MB; the Willow Garage map is
+/// 1.1 M cells.
+pub const DEFAULT_MAX_CELLS: u64 = 1 << 24;
 
 impl fmt::Display for MapError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -150,6 +169,19 @@ impl fmt::Display for MapError {
                 )
             }
             Self::EmptyImage(p) => write!(f, "image {} has no pixels", p.display()),
+            Self::NotAFile(p) => write!(f, "image {} is not a regular file", p.display()),
+            Self::TooLarge {
+                path,
+                width,
+                height,
+                max_cells,
+            } => write!(
+                f,
+                "image {} is {width} x {height} = {} cells, over the limit of {max_cells} \
+                 (raise it with --max-cells)",
+                path.display(),
+                u64::from(*width) * u64::from(*height)
+            ),
         }
     }
 }
@@ -215,16 +247,47 @@ pub fn classify_pixel(
     }
 }
 
-/// Loads a map_server map from its YAML file; the image path is relative to the YAML's folder.
+/// Loads a map_server map from its YAML file with the default cell limit
+/// ([`DEFAULT_MAX_CELLS`]); see [`load_map_limited`].
 ///
 /// # Errors
-/// [`MapError`]: a missing or unreadable file, malformed YAML, an undecodable image, bad
-/// thresholds, resolution or origin, an unsupported mode.
+/// As [`load_map_limited`].
 pub fn load_map(yaml_path: &Path) -> Result<OccupancyMap, MapError> {
-    let text = std::fs::read_to_string(yaml_path).map_err(|source| MapError::Io {
-        path: yaml_path.to_path_buf(),
-        source,
-    })?;
+    load_map_limited(yaml_path, DEFAULT_MAX_CELLS)
+}
+
+/// The longest map YAML read, bytes (a map_server YAML is a few hundred bytes).
+const MAX_YAML_BYTES: u64 = 1 << 20;
+
+/// Loads a map_server map from its YAML file; the image path is relative to the YAML's folder
+/// (an absolute path is taken as it is, as map_server does) and must name a regular file. The
+/// image's dimensions are read from its header first: more than `max_cells` cells is refused
+/// before anything is decoded, and the image is streamed from the file, never read whole.
+///
+/// # Errors
+/// [`MapError`]: a missing or unreadable file, malformed YAML (or over 1 MiB), an image that
+/// is not a regular file, too large or undecodable, bad thresholds, resolution or origin, an
+/// unsupported mode.
+pub fn load_map_limited(yaml_path: &Path, max_cells: u64) -> Result<OccupancyMap, MapError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| MapError::Io { path, source }
+    };
+    let mut text = String::new();
+    {
+        use std::io::Read;
+        std::fs::File::open(yaml_path)
+            .map_err(io(yaml_path))?
+            .take(MAX_YAML_BYTES + 1)
+            .read_to_string(&mut text)
+            .map_err(io(yaml_path))?;
+    }
+    if text.len() as u64 > MAX_YAML_BYTES {
+        return Err(MapError::Yaml {
+            path: yaml_path.to_path_buf(),
+            message: format!("longer than {MAX_YAML_BYTES} bytes"),
+        });
+    }
     let y: MapYaml = serde_yaml::from_str(&text).map_err(|e| MapError::Yaml {
         path: yaml_path.to_path_buf(),
         message: e.to_string(),
@@ -267,17 +330,43 @@ pub fn load_map(yaml_path: &Path) -> Result<OccupancyMap, MapError> {
         .parent()
         .unwrap_or_else(|| Path::new("."))
         .join(&y.image);
-    let bytes = std::fs::read(&image_path).map_err(|source| MapError::Io {
-        path: image_path.clone(),
-        source,
-    })?;
-    let img = image::load_from_memory(&bytes).map_err(|e| MapError::Image {
+    let meta = std::fs::metadata(&image_path).map_err(io(&image_path))?;
+    if !meta.is_file() {
+        return Err(MapError::NotAFile(image_path));
+    }
+    let decode_err = |e: image::ImageError| MapError::Image {
         path: image_path.clone(),
         message: e.to_string(),
-    })?;
-    let (w, h) = (img.width(), img.height());
+    };
+    let open = || -> Result<_, MapError> {
+        image::ImageReader::open(&image_path)
+            .map_err(io(&image_path))?
+            .with_guessed_format()
+            .map_err(io(&image_path))
+    };
+    let (w, h) = open()?.into_dimensions().map_err(decode_err)?;
     if w == 0 || h == 0 {
         return Err(MapError::EmptyImage(image_path));
+    }
+    if u64::from(w) * u64::from(h) > max_cells {
+        return Err(MapError::TooLarge {
+            path: image_path,
+            width: w,
+            height: h,
+            max_cells,
+        });
+    }
+    let mut reader = open()?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(w);
+    limits.max_image_height = Some(h);
+    reader.limits(limits);
+    let img = reader.decode().map_err(decode_err)?;
+    if (img.width(), img.height()) != (w, h) {
+        return Err(MapError::Image {
+            path: image_path,
+            message: "decoded size differs from the header's".into(),
+        });
     }
     let negate = y.negate.is_set();
     let mut cells = vec![Occupancy::Unknown; w as usize * h as usize];

@@ -15,6 +15,13 @@ use demo_plan::{fine_search, offset, COARSE, FINE, KAPPA, POSES, SIGMA_HIT_M, Z_
 /// Beams per FLASER scan of the Intel log.
 const BEAMS: usize = 180;
 
+/// Scans whose fine-best pose must be within 5 cm and 1° of the logged pose: the demo's measured
+/// result (7 of 8; scan 163 is 8.1 cm off, see docs/demo.md). The device and the host run the
+/// same crate, so agreeing with each other does not show that either localizes: a bug in the
+/// shared scoring path (an off-by-one in the prepared path's index dropped this to 1 of 8)
+/// changes both alike, and only this count catches it.
+const MIN_WITHIN: usize = 7;
+
 /// One real scan of the log with its logged laser pose (the firmware's type, same fields).
 pub struct DemoScan {
     /// Index of the FLASER line in the log.
@@ -132,10 +139,12 @@ fn close_pose(what: &str, printed: [f64; 3], host: &Pose, deg_decimals: i32) -> 
 
 /// Recomputes every scan on the host and checks the device's report `out` against it: per
 /// scan the best hypothesis (pose, weight, ESS, lag-1), the fine grid's best pose and its
-/// within/OUTSIDE verdict. Returns a one-line summary.
+/// within/OUTSIDE verdict; then that at least [`MIN_WITHIN`] scans are within. Returns a
+/// one-line summary.
 ///
 /// # Errors
-/// The first disagreement, or a scan missing from the report.
+/// The first disagreement, a scan missing from the report, or fewer than [`MIN_WITHIN`] scans
+/// within 5 cm and 1°.
 pub fn check(out: &str, blob: &[u8]) -> Result<String, String> {
     let refs = reference(blob)?;
     let lines: Vec<&str> = out.lines().collect();
@@ -168,6 +177,14 @@ pub fn check(out: &str, blob: &[u8]) -> Result<String, String> {
         }
     }
     let within = refs.iter().filter(|r| r.within).count();
+    if within < MIN_WITHIN {
+        return Err(format!(
+            "only {within} of {} scans' fine-best poses are within 5 cm and 1° of the logged pose \
+             (the demo's result is {MIN_WITHIN}): the device and the host agree, so the crate \
+             itself localizes worse",
+            refs.len()
+        ));
+    }
     Ok(format!(
         "host reference: {} scans recomputed on the host agree with the device's report (best and fine-best poses, weights, ESS, lag-1, to the printed digits; {within} within)",
         refs.len()

@@ -81,6 +81,11 @@ pub enum LineErrorKind {
     },
     /// A PARAM line without a name or value.
     BadParam,
+    /// A line longer than [`super::MAX_LINE_BYTES`] (the rest of it is skipped unread into
+    /// memory).
+    TooLong,
+    /// A line that is not UTF-8.
+    NotUtf8,
 }
 
 /// A malformed line: its 1-based number and what was wrong.
@@ -119,6 +124,10 @@ impl fmt::Display for LineError {
                 write!(f, "{field}: {token:?} is not a finite number")
             }
             LineErrorKind::BadParam => f.write_str("PARAM line without a name and a value"),
+            LineErrorKind::TooLong => {
+                write!(f, "longer than {} bytes (skipped)", super::MAX_LINE_BYTES)
+            }
+            LineErrorKind::NotUtf8 => f.write_str("not UTF-8 text"),
         }
     }
 }

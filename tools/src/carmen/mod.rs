@@ -130,6 +130,79 @@ impl MaxRange {
     }
 }
 
+/// The longest line read, bytes. A FLASER line of 1,081 beams (a 270° Hokuyo at 0.25°) is
+/// about 9 KB; anything longer is a counted bad line, and its bytes past this are skipped
+/// without being kept, so a log without newlines (`/dev/zero`, a broken pipe) costs bounded
+/// memory.
+pub const MAX_LINE_BYTES: usize = 64 * 1024;
+
+/// Message types, PARAM names and values longer than this are shortened when stored (they are
+/// printed back by `log info`).
+const MAX_NAME_CHARS: usize = 64;
+
+/// `s` as it may be printed: unchanged if it is at most [`MAX_NAME_CHARS`] of printable ASCII,
+/// else escaped (`\u{1b}`, `\0`, …) and cut at [`MAX_NAME_CHARS`] characters with `…`. A
+/// terminal never receives a control byte from the log.
+fn printable(s: &str) -> String {
+    if s.len() <= MAX_NAME_CHARS && s.bytes().all(|b| b.is_ascii_graphic()) {
+        return s.to_string();
+    }
+    let mut out: String = s.escape_default().take(MAX_NAME_CHARS).collect();
+    if s.escape_default().nth(MAX_NAME_CHARS).is_some() {
+        out.push('…');
+    }
+    out
+}
+
+/// One line of the log as [`next_line`] read it.
+enum Line<'a> {
+    /// Its text, without the line end.
+    Text(&'a str),
+    /// Longer than [`MAX_LINE_BYTES`]; the rest of it was skipped.
+    TooLong,
+    /// Not UTF-8.
+    NotUtf8,
+}
+
+/// Reads the next line into `buf` (at most [`MAX_LINE_BYTES`] of it kept), `None` at the end.
+fn next_line<'a, R: BufRead>(
+    reader: &mut R,
+    buf: &'a mut Vec<u8>,
+) -> std::io::Result<Option<Line<'a>>> {
+    use std::io::Read;
+    buf.clear();
+    let limit = MAX_LINE_BYTES as u64 + 1;
+    let n = reader.by_ref().take(limit).read_until(b'\n', buf)?;
+    if n == 0 {
+        return Ok(None);
+    }
+    if buf.last() == Some(&b'\n') {
+        buf.pop();
+        if buf.last() == Some(&b'\r') {
+            buf.pop();
+        }
+    } else if buf.len() > MAX_LINE_BYTES {
+        // Skip to the end of the line without keeping it.
+        loop {
+            let chunk = reader.fill_buf()?;
+            if chunk.is_empty() {
+                break;
+            }
+            if let Some(i) = chunk.iter().position(|&b| b == b'\n') {
+                reader.consume(i + 1);
+                break;
+            }
+            let len = chunk.len();
+            reader.consume(len);
+        }
+        return Ok(Some(Line::TooLong));
+    }
+    Ok(Some(match std::str::from_utf8(buf) {
+        Ok(t) => Line::Text(t),
+        Err(_) => Line::NotUtf8,
+    }))
+}
+
 /// A read log.
 #[derive(Clone, Debug, Default)]
 pub struct CarmenLog {
@@ -185,9 +258,27 @@ impl CarmenLog {
             }
         }
         let mut log = Self::default();
-        for (index, line) in reader.lines().enumerate() {
-            let line = line.map_err(|source| LogError::Io { path: None, source })?;
-            if let Err(e) = log.parse_line(&line, index + 1) {
+        let mut reader = reader;
+        let mut buf = Vec::new();
+        let mut number = 0usize;
+        loop {
+            let io = |source| LogError::Io { path: None, source };
+            let Some(line) = next_line(&mut reader, &mut buf).map_err(io)? else {
+                break;
+            };
+            number += 1;
+            let parsed = match line {
+                Line::Text(text) => log.parse_line(text, number),
+                Line::TooLong => Err(LineError {
+                    line: number,
+                    kind: LineErrorKind::TooLong,
+                }),
+                Line::NotUtf8 => Err(LineError {
+                    line: number,
+                    kind: LineErrorKind::NotUtf8,
+                }),
+            };
+            if let Err(e) = parsed {
                 if options.skip_bad_lines {
                     log.bad_lines.push(e);
                 } else {
@@ -227,12 +318,12 @@ impl CarmenLog {
                     });
                 };
                 if name == "robot_frontlaser_offset" {
-                    let v = parse_finite::<f32>(value, Field::Param(name.to_string()), number)?;
+                    let v = parse_finite::<f32>(value, Field::Param(printable(name)), number)?;
                     self.frontlaser_offset_m = Some(v);
                 }
-                self.params.push((name.to_string(), value.to_string()));
+                self.params.push((printable(name), printable(value)));
             }
-            other => *self.skipped.entry(other.to_string()).or_insert(0) += 1,
+            other => *self.skipped.entry(printable(other)).or_insert(0) += 1,
         }
         Ok(())
     }
