@@ -18,3 +18,4 @@ pub mod carmen_cli;
 pub mod demo_assets;
 pub mod mapping;
 pub mod sonar;
+pub mod track_assets;
