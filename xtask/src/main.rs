@@ -4,6 +4,7 @@
 mod budgets;
 mod demo;
 mod demo_ref;
+mod track;
 
 use clap::{Parser, Subcommand};
 use std::collections::BTreeMap;
@@ -98,6 +99,21 @@ enum Task {
         #[arg(long, value_enum, default_value = "mps2-an386")]
         board: demo::Board,
     },
+    /// Track a real Intel log segment with the localizer on the device
+    /// (firmware/src/bin/track.rs: 90 scans, 500 particles) under QEMU, recompute the same track
+    /// on the host with the same library code, and fail on any difference in the printed bit
+    /// patterns, or when the tracking RMSE is over its bound.
+    ///
+    /// The input is firmware/assets/track.rs (`cargo xtask track-assets`; a host test checks it
+    /// is current).
+    Track {
+        /// Board (QEMU machine and memory layout).
+        #[arg(long, value_enum, default_value = "mps2-an386")]
+        board: demo::Board,
+    },
+    /// Regenerate firmware/assets/track.rs (the track's scans, logged poses and synthesized
+    /// odometry) from ../shared/data.
+    TrackAssets,
     /// Budgets of the scoring core against issue 7's targets, as a table: .text/.rodata/.bss
     /// (size_core minus size_skeleton), stack high-water marks (painted stack), instructions
     /// per pose and per beam (QEMU counting plugin), no heap, fits the STM32F405 layout.
@@ -153,6 +169,8 @@ fn main() -> ExitCode {
         Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
         Task::DemoAssets => demo::demo_assets(),
+        Task::Track { board } => track::track(board),
+        Task::TrackAssets => track::track_assets(),
         Task::Refcases { check } => refcases(check),
         Task::Modelcases { check } => modelcases(check),
         Task::Ci => refcases(true)
