@@ -107,9 +107,11 @@ pub fn hash_particles(poses: &[Pose], weights: &[f32]) -> u32 {
     h
 }
 
-/// Runs the track over `scans` on `store`, calling `on_step` after every update and `mark(true)`
-/// / `mark(false)` just before and after each update's filter work (prediction and update: the
-/// instruction-count markers on the device). The odometry noise `alpha` (every `odom_alpha`),
+/// Runs the track over `scans` on `store`, calling `on_step` after every update, and
+/// `mark(true)` / `mark(false)` (the instruction-count markers on the device) around three
+/// regions per scan: the prediction (none for the first scan), the scan's preparation and the
+/// scoring alone of every particle (a baseline: its result is dropped), and the preparation and
+/// the whole update (scoring, weights, estimate, resampling). The odometry noise `alpha` (every `odom_alpha`),
 /// `seed` and `max_range_m` come from the asset.
 ///
 /// # Errors
@@ -164,12 +166,24 @@ pub fn run<const N: usize>(
     let mut previous: Option<&TrackScan> = None;
     for (k, s) in scans.iter().enumerate() {
         let scan = Scan::<BEAMS>::from_ranges(&s.ranges_m).map_err(|_| "scan rejected")?;
-        mark(true);
         if let Some(prev) = previous {
             let step = OdometryStep::between(&pose(&prev.odom), &pose(&s.odom))
                 .map_err(|_| "odometry step rejected")?;
+            mark(true);
             mcl.predict(&step, &mut rng);
+            mark(false);
         }
+        // The scoring alone, of the same particles (the baseline to subtract from the update;
+        // it changes nothing).
+        mark(true);
+        let prepared = tempered.prepare(&layout, &scan);
+        let mut total = 0.0f32;
+        for p in mcl.poses() {
+            total += prepared.score(core::hint::black_box(p)).log_likelihood;
+        }
+        core::hint::black_box(total);
+        mark(false);
+        mark(true);
         let prepared = tempered.prepare(&layout, &scan);
         let update = mcl.update_prepared(&prepared, None, &mut rng);
         mark(false);

@@ -12,8 +12,9 @@
 //! readable decimals with its error against the logged pose; at the end the final error, the
 //! RMSE over the segment (also as f64 bit patterns), the largest error and the resamplings.
 //! Output is integers and fixed decimals ([`Fixed`]), so no `core::fmt` float code is linked.
-//! Each update's filter work (prediction, scoring, bookkeeping, resampling) lies between the
-//! instruction-count markers. Exit status 1 when the run could not be set up.
+//! Per scan, three regions lie between the instruction-count markers: the prediction, the
+//! scoring alone of every particle (a baseline), and the whole update (`docs/localization.md`,
+//! "On the device"). Exit status 1 when the run could not be set up.
 #![no_std]
 #![no_main]
 
