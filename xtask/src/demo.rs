@@ -44,6 +44,28 @@ impl Board {
 /// `BEAMFIELD_CORE_HZ`.
 pub fn build_and_run(board: Board, bin: &str) -> Result<(i32, String, String)> {
     ensure_qemu()?;
+    let elf = build(board, bin)?;
+    run_to_files(
+        Command::new("timeout")
+            .args([
+                QEMU_TIMEOUT_S,
+                "qemu-system-arm",
+                "-machine",
+                board.machine(),
+            ])
+            .args([
+                "-nographic",
+                "-semihosting-config",
+                "enable=on,target=native",
+            ])
+            .args(["-icount", "shift=0", "-kernel"])
+            .arg(&elf),
+        bin,
+    )
+}
+
+/// Builds firmware program `bin` (release) for `board`; returns the ELF's path.
+pub fn build(board: Board, bin: &str) -> Result<PathBuf> {
     ensure_target(FIRMWARE_TARGET)?;
     let mut cmd = cargo();
     cmd.current_dir(repo_root().join("firmware"))
@@ -66,23 +88,7 @@ pub fn build_and_run(board: Board, bin: &str) -> Result<(i32, String, String)> {
         .filter(|m| m["reason"] == "compiler-artifact" && m["target"]["name"] == bin)
         .find_map(|m| m["executable"].as_str().map(PathBuf::from))
         .ok_or_else(|| format!("cargo built no `{bin}` executable"))?;
-    run_to_files(
-        Command::new("timeout")
-            .args([
-                QEMU_TIMEOUT_S,
-                "qemu-system-arm",
-                "-machine",
-                board.machine(),
-            ])
-            .args([
-                "-nographic",
-                "-semihosting-config",
-                "enable=on,target=native",
-            ])
-            .args(["-icount", "shift=0", "-kernel"])
-            .arg(&elf),
-        bin,
-    )
+    Ok(elf)
 }
 
 /// Builds `firmware/src/bin/demo.rs` (release) for `board` and runs it under QEMU, printing its

@@ -110,6 +110,11 @@ enum Task {
         /// Board (QEMU machine and memory layout).
         #[arg(long, value_enum, default_value = "mps2-an386")]
         board: demo::Board,
+        /// Run under QEMU's counting plugin instead (../shared/tools/qemu-insncount; needs gcc
+        /// and llvm-tools) and print the instructions per particle per update, scoring included
+        /// and excluded, and the program's RAM; the bit-equality check still runs.
+        #[arg(long)]
+        insns: bool,
     },
     /// Regenerate firmware/assets/track.rs (the track's scans, logged poses and synthesized
     /// odometry) from ../shared/data.
@@ -169,7 +174,13 @@ fn main() -> ExitCode {
         Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
         Task::DemoAssets => demo::demo_assets(),
-        Task::Track { board } => track::track(board),
+        Task::Track { board, insns } => {
+            if insns {
+                track::track_insns(board)
+            } else {
+                track::track(board)
+            }
+        }
         Task::TrackAssets => track::track_assets(),
         Task::Refcases { check } => refcases(check),
         Task::Modelcases { check } => modelcases(check),

@@ -7,8 +7,9 @@
 #[allow(dead_code)]
 mod track_plan;
 
-use super::demo::{build_and_run, Board};
-use super::{cargo, repo_root, run, Result, QEMU_TIMEOUT_S};
+use super::budgets::{llvm_tool, sections};
+use super::demo::{build, build_and_run, Board};
+use super::{cargo, insncount_dir, repo_root, run, run_counted, Result, QEMU_TIMEOUT_S};
 use beamfield::mcl::Particles;
 use track_plan::{Step, Summary, TrackScan, PARTICLES};
 
@@ -162,6 +163,100 @@ pub fn track(board: Board) -> Result {
             "the track exited {c} under QEMU ({machine}): its input was rejected"
         )),
     }
+}
+
+/// Instructions per particle per update from the counting plugin's regions of the track
+/// program: per scan the prediction (none for the first), the scoring alone, the whole update.
+/// Returns `(motion, scoring alone, update with scoring)` averaged over the scans, per particle.
+fn per_particle(counts: &[u64]) -> Result<(f64, f64, f64)> {
+    let scans = TRACK.len();
+    if counts.len() != 3 * scans - 1 {
+        return Err(format!(
+            "expected {} measured regions for {scans} scans, the plugin reported {}",
+            3 * scans - 1,
+            counts.len()
+        ));
+    }
+    let (mut motion, mut score, mut update) = (0u64, 0u64, 0u64);
+    // Scan 0: scoring, update; then per scan: prediction, scoring, update.
+    for (i, &n) in counts.iter().enumerate() {
+        match (i + 1) % 3 {
+            0 => motion += n,
+            1 => score += n,
+            _ => update += n,
+        }
+    }
+    let p = PARTICLES as f64;
+    Ok((
+        motion as f64 / ((scans - 1) as f64 * p),
+        score as f64 / (scans as f64 * p),
+        update as f64 / (scans as f64 * p),
+    ))
+}
+
+/// Runs the track program under QEMU's counting plugin on `board`, checks its output against
+/// the host as [`track`] does, and prints the instructions per particle per update (scoring
+/// included and excluded) and the program's RAM (`.data`, `.bss`, `.uninit` by `llvm-size`).
+pub fn track_insns(board: Board) -> Result {
+    let tools = insncount_dir()?;
+    let elf = build(board, "track")?;
+    let (code, out, err) = run_counted(&tools, &elf, board.machine(), "track-insns")?;
+    if code != 0 {
+        print!("{out}");
+        eprint!("{err}");
+        return Err(format!("the counting run exited {code}"));
+    }
+    for line in check(&out)? {
+        println!("{line}");
+    }
+    let counts: Vec<u64> = out
+        .lines()
+        .chain(err.lines())
+        .filter_map(|l| {
+            let rest = l.strip_prefix("insncount: region ")?;
+            let (_, n) = rest.split_once(": ")?;
+            n.strip_suffix(" instructions")?.parse().ok()
+        })
+        .collect();
+    let (motion, score, update) = per_particle(&counts)?;
+    let beams = track_plan::BEAMS as f64;
+    println!(
+        "instructions per particle per update ({} scans, {PARTICLES} particles, {}):",
+        TRACK.len(),
+        board.machine()
+    );
+    let row = |what: &str, n: f64, note: &str| println!("  {what:<50} {n:8.1}{note}");
+    row("motion model sample (predict)", motion, "");
+    row(
+        &format!("scoring alone (prepare + {beams} beams)"),
+        score,
+        &format!("  ({:.2} per beam slot)", score / beams),
+    );
+    row(
+        "update (scoring, weights, estimate, resampling)",
+        update,
+        "",
+    );
+    row(
+        "filter overhead (predict + update - scoring)",
+        motion + update - score,
+        "",
+    );
+    row("everything (predict + update)", motion + update, "");
+    let size = llvm_tool("llvm-size")?;
+    let secs = sections(&size, &elf)?;
+    let get = |n: &str| secs.get(n).copied().unwrap_or(0);
+    let particles = core::mem::size_of::<Particles<PARTICLES>>();
+    println!(
+        "RAM: .data {} + .bss {} + .uninit {} bytes (Particles<{PARTICLES}> is {particles} bytes, {} per particle); flash: .text {} + .rodata {} bytes",
+        get(".data"),
+        get(".bss"),
+        get(".uninit"),
+        particles / PARTICLES,
+        get(".text"),
+        get(".rodata"),
+    );
+    Ok(())
 }
 
 /// Regenerates `firmware/assets/track.rs` from the Intel lab log beside the repository.
