@@ -22,3 +22,4 @@ pub mod carmen_cli;
 pub mod demo_assets;
 pub mod mapping;
 pub mod sonar;
+pub mod track_assets;

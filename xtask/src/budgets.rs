@@ -31,7 +31,7 @@ const ALLOC_SYMBOLS: [&str; 4] = [
 ];
 
 /// An LLVM tool from PATH or from the Rust sysroot (`rustup component add llvm-tools`).
-fn llvm_tool(name: &str) -> Result<PathBuf> {
+pub(crate) fn llvm_tool(name: &str) -> Result<PathBuf> {
     let works = |p: &Path| {
         Command::new(p)
             .arg("--version")
@@ -57,7 +57,7 @@ fn llvm_tool(name: &str) -> Result<PathBuf> {
 }
 
 /// Allocated sections of an ELF and their sizes, bytes (`llvm-size -A`).
-fn sections(size: &Path, elf: &Path) -> Result<BTreeMap<String, u64>> {
+pub(crate) fn sections(size: &Path, elf: &Path) -> Result<BTreeMap<String, u64>> {
     let out = capture(Command::new(size).arg("-A").arg(elf))?;
     let mut map = BTreeMap::new();
     for line in out.lines() {

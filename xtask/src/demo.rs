@@ -18,7 +18,7 @@ pub enum Board {
 }
 
 impl Board {
-    pub(crate) fn machine(self) -> &'static str {
+    pub fn machine(self) -> &'static str {
         match self {
             Board::Mps2An386 => "mps2-an386",
             Board::Netduinoplus2 => "netduinoplus2",
@@ -39,10 +39,33 @@ impl Board {
     }
 }
 
-/// Builds `firmware/src/bin/demo.rs` (release) for `board` and runs it under QEMU, printing its
-/// report; fails unless it exits 0.
-pub fn demo(board: Board) -> Result {
+/// Builds firmware program `bin` (release) for `board` and runs it under QEMU; returns its exit
+/// code, stdout and stderr. The SysTick clock of the board reaches the build as
+/// `BEAMFIELD_CORE_HZ`.
+pub fn build_and_run(board: Board, bin: &str) -> Result<(i32, String, String)> {
     ensure_qemu()?;
+    let elf = build(board, bin)?;
+    run_to_files(
+        Command::new("timeout")
+            .args([
+                QEMU_TIMEOUT_S,
+                "qemu-system-arm",
+                "-machine",
+                board.machine(),
+            ])
+            .args([
+                "-nographic",
+                "-semihosting-config",
+                "enable=on,target=native",
+            ])
+            .args(["-icount", "shift=0", "-kernel"])
+            .arg(&elf),
+        bin,
+    )
+}
+
+/// Builds firmware program `bin` (release) for `board`; returns the ELF's path.
+pub fn build(board: Board, bin: &str) -> Result<PathBuf> {
     ensure_target(FIRMWARE_TARGET)?;
     let mut cmd = cargo();
     cmd.current_dir(repo_root().join("firmware"))
@@ -54,7 +77,7 @@ pub fn demo(board: Board) -> Result {
             "--target",
             FIRMWARE_TARGET,
             "--bin",
-            "demo",
+            bin,
             "--message-format=json-render-diagnostics",
         ]);
     eprintln!("+ (cd firmware && {})", show(&cmd));
@@ -62,22 +85,17 @@ pub fn demo(board: Board) -> Result {
     let elf = out
         .lines()
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .filter(|m| m["reason"] == "compiler-artifact" && m["target"]["name"] == "demo")
+        .filter(|m| m["reason"] == "compiler-artifact" && m["target"]["name"] == bin)
         .find_map(|m| m["executable"].as_str().map(PathBuf::from))
-        .ok_or("cargo built no `demo` executable")?;
+        .ok_or_else(|| format!("cargo built no `{bin}` executable"))?;
+    Ok(elf)
+}
+
+/// Builds `firmware/src/bin/demo.rs` (release) for `board` and runs it under QEMU, printing its
+/// report; fails unless it exits 0.
+pub fn demo(board: Board) -> Result {
     let machine = board.machine();
-    let (code, out, err) = run_to_files(
-        Command::new("timeout")
-            .args([QEMU_TIMEOUT_S, "qemu-system-arm", "-machine", machine])
-            .args([
-                "-nographic",
-                "-semihosting-config",
-                "enable=on,target=native",
-            ])
-            .args(["-icount", "shift=0", "-kernel"])
-            .arg(&elf),
-        "demo",
-    )?;
+    let (code, out, err) = build_and_run(board, "demo")?;
     print!("{out}");
     eprint!("{err}");
     match code {

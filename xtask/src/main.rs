@@ -6,6 +6,7 @@ mod demo;
 mod demo_ref;
 mod lidar;
 mod lidar_ref;
+mod track;
 mod willow;
 
 use clap::{Parser, Subcommand};
@@ -114,6 +115,26 @@ enum Task {
     /// STM32F405 layout, run on QEMU's netduinoplus2: a scan cast through it and scored at 125
     /// poses, every score compared bit for bit with the host's.
     Willow,
+    /// Track a real Intel log segment with the localizer on the device
+    /// (firmware/src/bin/track.rs: 90 scans, 500 particles) under QEMU, recompute the same track
+    /// on the host with the same library code, and fail on any difference in the printed bit
+    /// patterns, or when the tracking RMSE is over its bound.
+    ///
+    /// The input is firmware/assets/track.rs (`cargo xtask track-assets`; a host test checks it
+    /// is current).
+    Track {
+        /// Board (QEMU machine and memory layout).
+        #[arg(long, value_enum, default_value = "mps2-an386")]
+        board: demo::Board,
+        /// Run under QEMU's counting plugin instead (../shared/tools/qemu-insncount; needs gcc
+        /// and llvm-tools) and print the instructions per particle per update, scoring included
+        /// and excluded, and the program's RAM; the bit-equality check still runs.
+        #[arg(long)]
+        insns: bool,
+    },
+    /// Regenerate firmware/assets/track.rs (the track's scans, logged poses and synthesized
+    /// odometry) from ../shared/data.
+    TrackAssets,
     /// Budgets of the scoring core against the demo's targets, as a table: .text/.rodata/.bss
     /// (size_core minus size_skeleton), stack high-water marks (painted stack), instructions
     /// per pose and per beam (QEMU counting plugin), no heap, fits the STM32F405 layout.
@@ -193,6 +214,14 @@ fn main() -> ExitCode {
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),
         Task::Lidar { no_count, split } => lidar::lidar(!no_count, split),
         Task::DemoAssets => demo::demo_assets(),
+        Task::Track { board, insns } => {
+            if insns {
+                track::track_insns(board)
+            } else {
+                track::track(board)
+            }
+        }
+        Task::TrackAssets => track::track_assets(),
         Task::Refcases { check } => refcases(check),
         Task::Modelcases { check } => modelcases(check),
         Task::Ci => refcases(true)

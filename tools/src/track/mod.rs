@@ -168,7 +168,7 @@ fn usage(m: impl Into<String>) -> TrackError {
 mod draw;
 mod run;
 
-pub use run::{load, run_once, Metrics, RunOptions, RunResult, TrackInput};
+pub use run::{load, run_once, synthesize_odometry, Metrics, RunOptions, RunResult, TrackInput};
 
 fn parse_list(text: &str, what: &str, n: usize) -> Result<Vec<f32>, TrackError> {
     let v: Vec<f32> = text

@@ -222,6 +222,35 @@ fn amcl_cube(
     p.ln()
 }
 
+/// The synthesized odometry of run seed `seed`: starting at the first logged pose, each step
+/// between consecutive logged poses is perturbed by `noise` ([`OdometryNoise::sample`], drawing
+/// from [`SplitMix64`] seeded `seed ^ ODOMETRY_SEED_XOR`) and chained. One pose per logged pose
+/// (none for none). The filter sees the steps between consecutive odometry poses; the firmware's
+/// track asset (`firmware/assets/track.rs`) is written from the same function.
+///
+/// # Errors
+/// [`TrackError::Usage`] for a logged pose that is not finite.
+pub fn synthesize_odometry(
+    noise: &OdometryNoise,
+    logged: &[Pose],
+    seed: u64,
+) -> Result<Vec<Pose>, TrackError> {
+    let mut odom_rng = SplitMix64::new(seed ^ ODOMETRY_SEED_XOR);
+    let mut out: Vec<Pose> = Vec::with_capacity(logged.len());
+    for (k, truth) in logged.iter().enumerate() {
+        let next = match (k.checked_sub(1).and_then(|j| logged.get(j)), out.last()) {
+            (Some(prev), Some(odom)) => {
+                let step = OdometryStep::between(prev, truth)
+                    .map_err(|e| usage(format!("logged pose {k}: {e}")))?;
+                noise.sample(odom, &step, &mut odom_rng)
+            }
+            _ => *truth,
+        };
+        out.push(next);
+    }
+    Ok(out)
+}
+
 /// Runs the filter over the log once.
 ///
 /// # Errors
@@ -250,7 +279,6 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
     let mut store: Box<Particles<MAX_TRACK_PARTICLES>> = Box::default();
     let mut mcl = Mcl::new(&mut store, config).map_err(TrackError::Filter)?;
     let mut rng = SplitMix64::new(o.seed);
-    let mut odom_rng = SplitMix64::new(o.seed ^ ODOMETRY_SEED_XOR);
     let mut kidnap_rng = SplitMix64::new(o.seed ^ KIDNAP_SEED_XOR);
     let first = input.logged.first().copied().unwrap_or_default();
     match (o.init, &free) {
@@ -274,16 +302,12 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         injected: 0,
     };
     let progress = std::io::stderr().is_terminal();
-    let mut odom = first;
+    let odom = synthesize_odometry(&noise, input.logged.get(..n).unwrap_or(&[]), o.seed)?;
     for k in 0..n {
         let truth = input.logged[k];
         if k > 0 {
-            let step = OdometryStep::between(&input.logged[k - 1], &truth)
-                .map_err(|e| usage(format!("logged pose {k}: {e}")))?;
-            let next = noise.sample(&odom, &step, &mut odom_rng);
-            let seen = OdometryStep::between(&odom, &next)
+            let seen = OdometryStep::between(&odom[k - 1], &odom[k])
                 .map_err(|e| usage(format!("odometry {k}: {e}")))?;
-            odom = next;
             mcl.predict(&seen, &mut rng);
         }
         if o.kidnap == Some(k) {

@@ -1,0 +1,121 @@
+//! The localizer on the device: Monte Carlo localization ([`beamfield::mcl`]) of a real Intel
+//! lab log segment, bit for bit the run the host recomputes.
+//!
+//! The input (`firmware/assets/track.rs`, standing in for the sensor and wheel drivers) is the
+//! log's first 90 scans, a loop of the corridor with four corners, with their logged poses and
+//! the odometry `beamfield track` synthesizes for the same seed. The run is that of
+//! `src/track_plan.rs`, shared word for word with `cargo xtask track`, which recomputes it on
+//! the host and requires every printed bit pattern to match.
+//!
+//! Per update it prints the estimate `(x, y, θ)` and the effective sample size as f32 bit
+//! patterns (hex), a hash of every particle's pose and weight bits, and the same estimate in
+//! readable decimals with its error against the logged pose; at the end the final error, the
+//! RMSE over the segment (also as f64 bit patterns), the largest error and the resamplings.
+//! Output is integers and fixed decimals ([`Fixed`]), so no `core::fmt` float code is linked.
+//! Per scan, three regions lie between the instruction-count markers: the prediction, the
+//! scoring alone of every particle (a baseline), and the whole update (`docs/localization.md`,
+//! "On the device"). Exit status 1 when the run could not be set up.
+#![no_std]
+#![no_main]
+
+use beamfield::mcl::Particles;
+use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println, Fixed};
+use cortex_m_rt::entry;
+#[cfg(feature = "defmt")]
+use panic_probe as _;
+#[cfg(not(feature = "defmt"))]
+use panic_semihosting as _;
+
+#[path = "../track_plan.rs"]
+mod track_plan;
+use track_plan::{run, Step, TrackScan, BEAMS, KAPPA, PARTICLES};
+
+/// The generated input: the log's ranges are data, not approximations of constants.
+#[allow(clippy::approx_constant)]
+mod asset {
+    use super::TrackScan;
+    include!("../../assets/track.rs");
+}
+use asset::{MAX_RANGE_M, ODOM_ALPHA, SEED, TRACK};
+
+/// The 5 cm distance field of the Intel map (the demo's, see `docs/demo.md`).
+static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
+
+fn report(s: &Step) {
+    let e = &s.estimate;
+    let resampled = matches!(s.update, Ok(u) if u.resampled);
+    println!(
+        "update {} (scan {}): bits {:08x} {:08x} {:08x} ess {:08x} particles {:08x}; ({}, {}, {} deg) ESS {}, error {} cm {} deg{}{}",
+        s.k,
+        TRACK.get(s.k).map_or(0, |t| t.log_index),
+        e.pose.x_m.to_bits(),
+        e.pose.y_m.to_bits(),
+        e.pose.theta_rad.to_bits(),
+        e.ess.to_bits(),
+        s.particles_hash,
+        Fixed::new(f64::from(e.pose.x_m), 3),
+        Fixed::new(f64::from(e.pose.y_m), 3),
+        Fixed::new(f64::from(e.pose.theta_rad.to_degrees()), 2),
+        Fixed::new(f64::from(e.ess), 1),
+        Fixed::new(s.trans_err_m * 100.0, 1),
+        Fixed::new(s.heading_err_deg, 2),
+        if resampled { ", resampled" } else { "" },
+        if s.update.is_err() { ", skipped" } else { "" },
+    );
+}
+
+#[entry]
+fn main() -> ! {
+    // The particles, in `.bss` (taken once).
+    let Some(store) = cortex_m::singleton!(: Particles<PARTICLES> = Particles::new()) else {
+        println!("track: particle storage taken twice");
+        exit(false)
+    };
+    println!(
+        "beamfield track: {} real scans of {} beams, {} particles ({} bytes), kappa {}, odom_alpha {}, seed {}",
+        TRACK.len(),
+        BEAMS,
+        PARTICLES,
+        core::mem::size_of::<Particles<PARTICLES>>(),
+        Fixed::new(f64::from(KAPPA), 2),
+        Fixed::new(f64::from(ODOM_ALPHA), 3),
+        SEED,
+    );
+    let mark = |start: bool| {
+        if start {
+            bench_mark_start()
+        } else {
+            bench_mark_end()
+        }
+    };
+    match run(
+        store,
+        BLOB,
+        &TRACK,
+        MAX_RANGE_M,
+        ODOM_ALPHA,
+        SEED,
+        mark,
+        report,
+    ) {
+        Ok(sum) => {
+            println!(
+                "final error {} cm {} deg; RMSE over {} updates {} cm {} deg (bits {:016x} {:016x}); max error {} m; {} resamplings",
+                Fixed::new(sum.final_err.0 * 100.0, 2),
+                Fixed::new(sum.final_err.1, 2),
+                sum.updates,
+                Fixed::new(sum.trans_rmse_m * 100.0, 2),
+                Fixed::new(sum.heading_rmse_deg, 3),
+                sum.trans_rmse_m.to_bits(),
+                sum.heading_rmse_deg.to_bits(),
+                Fixed::new(sum.max_trans_m, 3),
+                sum.resamplings,
+            );
+            exit(true)
+        }
+        Err(e) => {
+            println!("track: {}", e);
+            exit(false)
+        }
+    }
+}
