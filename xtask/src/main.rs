@@ -557,7 +557,7 @@ fn insns(machine: &str) -> Result {
     }
     let per_beam = |n: u64| n as f64 / INSNS_BEAMS as f64;
     println!(
-        "\ninstructions on {machine} ({FIRMWARE_TARGET}, release); regions 0-3: {INSNS_BEAMS} synthetic beams; 4-9: Intel map and real scans; 10-14: LiDAR streams of the real scans:"
+        "\ninstructions on {machine} ({FIRMWARE_TARGET}, release); regions 0-3: {INSNS_BEAMS} synthetic beams; 4-9: Intel map and real scans; 10-11: the same map tiled; 12-16: LiDAR streams of the real scans:"
     );
     println!(
         "{:<3} {:<34} {:>12} {:>10} {:>10} per",
