@@ -44,6 +44,7 @@ pub mod assembler;
 pub mod io;
 pub mod ld06;
 pub mod rplidar;
+mod sync;
 pub mod xv11;
 
 pub use assembler::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution, ScanAssembler};

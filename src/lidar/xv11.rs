@@ -23,6 +23,7 @@
 //! The decoder waits for `0xFA` followed by a valid index byte. After a failed checksum it looks
 //! for the next such pair inside the rejected bytes.
 
+use super::sync::HeaderHunt;
 use super::{bump, DecoderStats, EncodeError, LidarPoint};
 
 /// Start byte of a packet.
@@ -272,10 +273,7 @@ pub fn encode_revolution(
 /// Byte-at-a-time XV-11 stream decoder. See the module docs.
 #[derive(Clone, Debug)]
 pub struct Xv11Decoder {
-    buf: [u8; PACKET_LEN],
-    len: usize,
-    skipping: bool,
-    stats: DecoderStats,
+    hunt: HeaderHunt<PACKET_LEN>,
     last_speed_rpm_q6: Option<u16>,
 }
 
@@ -289,18 +287,7 @@ impl Xv11Decoder {
     /// A decoder waiting for a start byte.
     pub const fn new() -> Self {
         Self {
-            buf: [0; PACKET_LEN],
-            len: 0,
-            skipping: false,
-            stats: DecoderStats {
-                bytes: 0,
-                frames_ok: 0,
-                bad_checksum: 0,
-                bad_frames: 0,
-                skipped_bytes: 0,
-                resyncs: 0,
-                points: 0,
-            },
+            hunt: HeaderHunt::new(),
             last_speed_rpm_q6: None,
         }
     }
@@ -315,73 +302,26 @@ impl Xv11Decoder {
 
     /// Feeds one byte (see [`Xv11Decoder::feed`]).
     pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
-        bump(&mut self.stats.bytes);
-        match self.len {
-            0 => {
-                if byte == START {
-                    self.buf[0] = byte;
-                    self.len = 1;
-                } else {
-                    self.skip(1);
-                }
-            }
-            1 => {
-                if is_index(byte) {
-                    self.buf[1] = byte;
-                    self.len = 2;
-                } else {
-                    self.skip(1);
-                    if byte == START {
-                        self.len = 1;
-                    } else {
-                        self.len = 0;
-                        self.skip(1);
-                    }
-                }
-            }
-            n => {
-                if let Some(slot) = self.buf.get_mut(n) {
-                    *slot = byte;
-                }
-                self.len = n + 1;
-                if self.len == PACKET_LEN {
-                    self.complete(on_point);
-                }
-            }
+        if self.hunt.push(byte, START, is_index) {
+            self.complete(on_point);
         }
-    }
-
-    fn skip(&mut self, n: usize) {
-        if !self.skipping {
-            bump(&mut self.stats.resyncs);
-            self.skipping = true;
-        }
-        self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(n as u32);
     }
 
     fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
-        match Xv11Packet::parse(&self.buf) {
+        match Xv11Packet::parse(&self.hunt.buf) {
             Ok(p) => {
-                self.len = 0;
-                self.skipping = false;
-                bump(&mut self.stats.frames_ok);
+                self.hunt.accept();
+                let stats = &mut self.hunt.counter.stats;
+                bump(&mut stats.frames_ok);
                 self.last_speed_rpm_q6 = Some(p.speed_rpm_q6);
                 for j in 0..READINGS_PER_PACKET {
                     on_point(p.point(j));
                 }
-                self.stats.points = self.stats.points.saturating_add(READINGS_PER_PACKET as u32);
+                stats.points = stats.points.saturating_add(READINGS_PER_PACKET as u32);
             }
             Err(_) => {
-                bump(&mut self.stats.bad_checksum);
-                let rest = self.buf.get(1..).unwrap_or(&[]);
-                let next = rest
-                    .windows(2)
-                    .position(|w| matches!(w, [START, i] if is_index(*i)))
-                    .or_else(|| (rest.last() == Some(&START)).then(|| rest.len() - 1))
-                    .map_or(PACKET_LEN, |p| p + 1);
-                self.skip(next);
-                self.buf.copy_within(next.., 0);
-                self.len = PACKET_LEN - next;
+                bump(&mut self.hunt.counter.stats.bad_checksum);
+                self.hunt.rehunt(START, is_index);
             }
         }
     }
@@ -389,12 +329,12 @@ impl Xv11Decoder {
     /// The counters. `bytes == 22 · frames_ok + skipped_bytes +` [`Xv11Decoder::buffered`]
     /// always holds (an index is checked before the packet is buffered, so `bad_frames` stays 0).
     pub fn stats(&self) -> DecoderStats {
-        self.stats
+        self.hunt.counter.stats
     }
 
     /// Bytes of a partial packet held.
     pub fn buffered(&self) -> usize {
-        self.len
+        self.hunt.len
     }
 
     /// Rotation speed of the last good packet, rpm × 64.
