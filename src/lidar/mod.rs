@@ -133,6 +133,13 @@ impl core::error::Error for EncodeError {}
 pub trait StreamDecoder {
     /// Feeds one byte; `on_point` is called for each point of a frame this byte completed.
     fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint));
+    /// Feeds received bytes; the same as [`StreamDecoder::push_byte`] for each byte in turn
+    /// (a decoder may take a frame's body in one block, as the LD06 decoder does).
+    fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
+        for &b in bytes {
+            self.push_byte(b, &mut on_point);
+        }
+    }
     /// The decoder's counters.
     fn stats(&self) -> DecoderStats;
 }
@@ -143,6 +150,10 @@ macro_rules! stream_decoder {
             #[inline]
             fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
                 <$t>::push_byte(self, byte, on_point)
+            }
+            #[inline]
+            fn feed(&mut self, bytes: &[u8], on_point: impl FnMut(LidarPoint)) {
+                <$t>::feed(self, bytes, on_point)
             }
             fn stats(&self) -> DecoderStats {
                 <$t>::stats(self)
