@@ -25,7 +25,7 @@
 //! a truncated frame costs only itself, not the frame that follows it.
 
 use super::sync::HeaderHunt;
-use super::{bump, DecoderStats, EncodeError, LidarPoint};
+use super::{bump, range_units, DecoderStats, EncodeError, LidarPoint};
 use crc::{Algorithm, Crc};
 
 /// Frame header byte.
@@ -111,13 +111,7 @@ impl Ld06Sample {
     /// millimetre; 0 ("no measurement") for NaN, negative, or anything that rounds to 0 mm or
     /// past 65,535 mm.
     pub fn from_range_m(range_m: f32, intensity: u8) -> Self {
-        let mm = range_m * 1000.0;
-        let distance_mm = if (0.5..65_535.5).contains(&mm) {
-            // In [0.5, 65,535.5): rounds to 1..=65,535.
-            (mm + 0.5) as u16
-        } else {
-            0
-        };
+        let distance_mm = range_units(range_m, 1000.0, u16::MAX);
         Self {
             distance_mm,
             intensity: if distance_mm == 0 { 0 } else { intensity },

@@ -24,7 +24,7 @@
 //! for the next such pair inside the rejected bytes.
 
 use super::sync::HeaderHunt;
-use super::{bump, DecoderStats, EncodeError, LidarPoint};
+use super::{bump, range_units, DecoderStats, EncodeError, LidarPoint};
 
 /// Start byte of a packet.
 pub const START: u8 = 0xFA;
@@ -111,10 +111,10 @@ impl Xv11Reading {
     /// millimetre; NaN, negative, 0 mm and anything past 16,383 mm become an invalid reading
     /// (error code 0, strength 0).
     pub fn from_range_m(range_m: f32, strength: u16) -> Self {
-        let mm = range_m * 1000.0;
-        if (0.5..f32::from(MAX_DISTANCE_MM) + 0.5).contains(&mm) {
+        let distance_mm = range_units(range_m, 1000.0, MAX_DISTANCE_MM);
+        if distance_mm != 0 {
             Self {
-                distance_mm: (mm + 0.5) as u16,
+                distance_mm,
                 invalid: false,
                 strength_warning: false,
                 strength,

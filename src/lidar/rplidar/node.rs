@@ -1,7 +1,7 @@
 //! Scan nodes: one node's fields, its check bits, and the encoder of a whole revolution.
 
 use super::{RplidarError, FULL_TURN_Q6, NODE_LEN};
-use crate::lidar::{EncodeError, LidarPoint};
+use crate::lidar::{range_units, EncodeError, LidarPoint};
 
 /// One scan node, in the protocol's units.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -82,12 +82,7 @@ impl RplidarNode {
     /// to the quarter millimetre; NaN, negative, 0 and anything past 16,383.75 mm become "no
     /// measurement" with quality 0.
     pub fn from_range_m(range_m: f32, angle_q6: u16, quality: u8, start: bool) -> Self {
-        let q2 = range_m * 4000.0;
-        let distance_q2 = if (0.5..65_535.5).contains(&q2) {
-            (q2 + 0.5) as u16
-        } else {
-            0
-        };
+        let distance_q2 = range_units(range_m, 4000.0, u16::MAX);
         Self {
             start,
             quality: if distance_q2 == 0 { 0 } else { quality & 0x3F },
