@@ -55,6 +55,9 @@ impl SkipCounter {
 
 /// The frame buffer and counters of a decoder of `LEN`-byte frames with a two-byte header.
 #[derive(Clone, Debug)]
+// Declaration order kept (the buffer first), as in `RplidarDecoder`: on a Cortex-M4 it takes
+// fewer instructions per byte than the compiler's own order (`cargo xtask insns`, regions 13-16).
+#[repr(C)]
 pub(crate) struct HeaderHunt<const LEN: usize> {
     /// The frame being received: `buf[..len]` holds its bytes, header first.
     pub(crate) buf: [u8; LEN],
