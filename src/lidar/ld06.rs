@@ -25,7 +25,7 @@
 //! a truncated frame costs only itself, not the frame that follows it.
 
 use super::sync::HeaderHunt;
-use super::{bump, range_units, DecoderStats, EncodeError, LidarPoint};
+use super::{bump, range_units, room, DecoderStats, EncodeError, LidarPoint};
 use crc::{Algorithm, Crc};
 
 /// Frame header byte.
@@ -432,12 +432,7 @@ pub fn encode_revolution(
         return Err(EncodeError::BadSampleCount(n));
     }
     let needed = revolution_len(n);
-    if out.len() < needed {
-        return Err(EncodeError::BufferTooSmall {
-            needed,
-            given: out.len(),
-        });
-    }
+    let out = room(out, needed)?;
     let step_cdeg = u32::from(FULL_TURN_CDEG) / n as u32;
     for (f, (chunk, dst)) in samples
         .chunks_exact(POINTS_PER_FRAME)

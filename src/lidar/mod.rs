@@ -165,6 +165,16 @@ stream_decoder!(ld06::Ld06Decoder);
 stream_decoder!(rplidar::RplidarDecoder);
 stream_decoder!(xv11::Xv11Decoder);
 
+/// `out[..needed]`: the room an encoder writes into.
+///
+/// # Errors
+/// [`EncodeError::BufferTooSmall`] when `out` is shorter than `needed`.
+pub(crate) fn room(out: &mut [u8], needed: usize) -> Result<&mut [u8], EncodeError> {
+    let given = out.len();
+    out.get_mut(..needed)
+        .ok_or(EncodeError::BufferTooSmall { needed, given })
+}
+
 /// A range (metres) in a protocol's distance unit (`units_per_m` to the metre), rounded to the
 /// nearest unit; 0 ("no measurement") for NaN, negative, or anything that rounds to 0 or past
 /// `max_units`. What each encoder writes for a range.

@@ -24,7 +24,7 @@
 //! for the next such pair inside the rejected bytes.
 
 use super::sync::HeaderHunt;
-use super::{bump, range_units, DecoderStats, EncodeError, LidarPoint};
+use super::{bump, range_units, room, DecoderStats, EncodeError, LidarPoint};
 
 /// Start byte of a packet.
 pub const START: u8 = 0xFA;
@@ -191,13 +191,7 @@ impl Xv11Packet {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
-        let given = out.len();
-        let o = out
-            .get_mut(..PACKET_LEN)
-            .ok_or(EncodeError::BufferTooSmall {
-                needed: PACKET_LEN,
-                given,
-            })?;
+        let o = room(out, PACKET_LEN)?;
         let [s0, s1] = self.speed_rpm_q6.to_le_bytes();
         if let Some(head) = o.get_mut(..4) {
             head.copy_from_slice(&[START, FIRST_INDEX.wrapping_add(self.packet), s0, s1]);
@@ -248,12 +242,7 @@ pub fn encode_revolution(
     speed_rpm_q6: u16,
     out: &mut [u8],
 ) -> Result<usize, EncodeError> {
-    if out.len() < REVOLUTION_LEN {
-        return Err(EncodeError::BufferTooSmall {
-            needed: REVOLUTION_LEN,
-            given: out.len(),
-        });
-    }
+    let out = room(out, REVOLUTION_LEN)?;
     for (p, (chunk, dst)) in readings
         .chunks_exact(READINGS_PER_PACKET)
         .zip(out.chunks_exact_mut(PACKET_LEN))

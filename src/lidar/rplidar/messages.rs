@@ -2,7 +2,7 @@
 //! descriptors, GET_INFO and GET_HEALTH.
 
 use super::{RplidarError, DESCRIPTOR_LEN, HEALTH_LEN, INFO_LEN, NODE_LEN, SYNC, SYNC2};
-use crate::lidar::EncodeError;
+use crate::lidar::{room, EncodeError};
 
 /// The requests a controller sends. Each is two bytes, `0xA5` and the command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,14 +41,8 @@ impl Command {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(self, out: &mut [u8]) -> Result<usize, EncodeError> {
-        let given = out.len();
-        match out.get_mut(..2) {
-            Some(o) => {
-                o.copy_from_slice(&[SYNC, self.code()]);
-                Ok(2)
-            }
-            None => Err(EncodeError::BufferTooSmall { needed: 2, given }),
-        }
+        room(out, 2)?.copy_from_slice(&[SYNC, self.code()]);
+        Ok(2)
     }
 
     /// Parses a request (what a sensor, or a simulator of one, receives).
@@ -128,13 +122,7 @@ impl Descriptor {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
-        let given = out.len();
-        let o = out
-            .get_mut(..DESCRIPTOR_LEN)
-            .ok_or(EncodeError::BufferTooSmall {
-                needed: DESCRIPTOR_LEN,
-                given,
-            })?;
+        let o = room(out, DESCRIPTOR_LEN)?;
         let word = (self.len & 0x3FFF_FFFF) | (u32::from(self.mode & 3) << 30);
         let [a, b, c, d] = word.to_le_bytes();
         o.copy_from_slice(&[SYNC, SYNC2, a, b, c, d, self.data_type]);
@@ -186,10 +174,7 @@ impl DeviceInfo {
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit_response(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
         let needed = DESCRIPTOR_LEN + INFO_LEN;
-        let given = out.len();
-        let o = out
-            .get_mut(..needed)
-            .ok_or(EncodeError::BufferTooSmall { needed, given })?;
+        let o = room(out, needed)?;
         let (d, p) = o.split_at_mut(DESCRIPTOR_LEN);
         Descriptor::INFO.emit(d)?;
         let (head, serial) = p.split_at_mut(4);
@@ -235,10 +220,7 @@ impl Health {
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit_response(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
         let needed = DESCRIPTOR_LEN + HEALTH_LEN;
-        let given = out.len();
-        let o = out
-            .get_mut(..needed)
-            .ok_or(EncodeError::BufferTooSmall { needed, given })?;
+        let o = room(out, needed)?;
         let (d, p) = o.split_at_mut(DESCRIPTOR_LEN);
         Descriptor::HEALTH.emit(d)?;
         let [lo, hi] = self.error_code.to_le_bytes();

@@ -1,7 +1,7 @@
 //! Scan nodes: one node's fields, its check bits, and the encoder of a whole revolution.
 
 use super::{RplidarError, FULL_TURN_Q6, NODE_LEN};
-use crate::lidar::{range_units, EncodeError, LidarPoint};
+use crate::lidar::{range_units, room, EncodeError, LidarPoint};
 
 /// One scan node, in the protocol's units.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -52,11 +52,7 @@ impl RplidarNode {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
-        let given = out.len();
-        let o = out.get_mut(..NODE_LEN).ok_or(EncodeError::BufferTooSmall {
-            needed: NODE_LEN,
-            given,
-        })?;
+        let o = room(out, NODE_LEN)?;
         let s = u8::from(self.start);
         let b0 = ((self.quality & 0x3F) << 2) | ((s ^ 1) << 1) | s;
         let b1 = (((self.angle_q6 & 0x7F) as u8) << 1) | 1;
@@ -114,12 +110,7 @@ pub fn encode_revolution(
         return Err(EncodeError::BadSampleCount(n));
     }
     let needed = revolution_len(n);
-    if out.len() < needed {
-        return Err(EncodeError::BufferTooSmall {
-            needed,
-            given: out.len(),
-        });
-    }
+    let out = room(out, needed)?;
     let step = FULL_TURN_Q6 / n as u16;
     for (k, (&r, dst)) in ranges_m
         .iter()
