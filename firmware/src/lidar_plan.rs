@@ -3,17 +3,38 @@
 //! `xtask/src/lidar_ref.rs`), so the two can be compared to the printed digits.
 //!
 //! Only `core` and `beamfield`: it compiles for the Cortex-M and the host alike. It uses the
-//! demo's model and pose grid (`demo_plan.rs`, included beside it as `super::demo_plan`).
+//! demo's model and pose grid (`demo_plan.rs`, included beside it as `super::demo_plan`), the
+//! Intel log's model and layout (`intel_setup.rs`), and holds the log segment the stream is
+//! made of (`assets/lidar_segment.rs`).
 
 use super::demo_plan::{COARSE, KAPPA, POSES, SIGMA_HIT_M, Z_HIT, Z_RAND};
 use beamfield::lidar::{AssemblerConfig, AssemblerError, ScanAssembler};
 use beamfield::{
-    normalize_log_weights, BeamLayout, FieldView, LikelihoodField, LikelihoodParams,
-    NormalizeError, Pose, Scan, SensorMount, Tempered,
+    normalize_log_weights, BeamLayout, LikelihoodField, NormalizeError, Pose, Scan, Tempered,
 };
 
-/// Beams per scan: the Intel log's FLASER layout.
-pub const BEAMS: usize = 180;
+#[path = "intel_setup.rs"]
+mod intel_setup;
+pub use intel_setup::BEAMS;
+
+/// One real scan of the log with its logged (corrected) laser pose
+/// (`firmware/assets/lidar_segment.rs`).
+pub struct DemoScan {
+    /// Index of the FLASER line in the log.
+    pub log_index: u32,
+    /// Logged laser pose `[x_m, y_m, theta_rad]`.
+    pub pose: [f32; 3],
+    /// The 180 ranges, metres (the log's max-range value means "no return").
+    pub ranges_m: [f32; BEAMS],
+}
+
+/// The log's scans sent as the stream: `SCANS` and the log's `MAX_RANGE_M` (generated; a range
+/// of 3.14 m is not π).
+#[allow(clippy::approx_constant)]
+pub mod segment {
+    use super::DemoScan;
+    include!("../assets/lidar_segment.rs");
+}
 
 /// The model and the layout the scans are scored with.
 pub struct Setup<'a> {
@@ -28,19 +49,9 @@ pub struct Setup<'a> {
 /// `blob`, and the Intel layout with `max_range_m`. The error names the part that was
 /// rejected.
 pub fn setup(blob: &[u8], max_range_m: f32) -> Result<Setup<'_>, &'static str> {
-    let view = FieldView::parse(blob).map_err(|_| "map blob rejected")?;
-    let params = LikelihoodParams::new(Z_HIT, Z_RAND, SIGMA_HIT_M, max_range_m)
-        .map_err(|_| "likelihood parameters rejected")?;
-    let tempered = Tempered::new(LikelihoodField::new(view, params), KAPPA, 1)
-        .map_err(|_| "tempering rejected")?;
-    let layout = BeamLayout::<BEAMS>::uniform(
-        -core::f32::consts::FRAC_PI_2,
-        core::f32::consts::PI / BEAMS as f32,
-        BEAMS,
-        max_range_m,
-        SensorMount::CENTERED,
-    )
-    .map_err(|_| "beam layout rejected")?;
+    let tempered =
+        intel_setup::tempered_field(blob, Z_HIT, Z_RAND, SIGMA_HIT_M, max_range_m, KAPPA)?;
+    let layout = intel_setup::layout(max_range_m)?;
     Ok(Setup { tempered, layout })
 }
 

@@ -172,31 +172,19 @@ impl FieldHeader {
     /// [`BlobError::ZeroSize`], [`BlobError::TooLarge`], [`BlobError::BadCellSize`],
     /// [`BlobError::BadOrigin`], [`BlobError::BadMaxDist`].
     pub fn validate(&self) -> Result<usize, BlobError> {
-        if self.width == 0 || self.height == 0 {
-            return Err(BlobError::ZeroSize);
-        }
-        if self.width > BLOB_MAX_SIDE || self.height > BLOB_MAX_SIDE {
-            return Err(BlobError::TooLarge);
-        }
-        let w = usize::try_from(self.width).map_err(|_| BlobError::TooLarge)?;
-        let h = usize::try_from(self.height).map_err(|_| BlobError::TooLarge)?;
-        let cells = w.checked_mul(h).ok_or(BlobError::TooLarge)?;
-        cells
-            .checked_add(BLOB_HEADER_LEN)
-            .ok_or(BlobError::TooLarge)?;
-        let cs = self.cell_size_m;
-        if !(cs.is_finite() && cs > 0.0 && (1.0 / cs).is_finite()) {
-            return Err(BlobError::BadCellSize);
-        }
-        let far_x = self.origin_x_m + self.width as f32 * cs;
-        let far_y = self.origin_y_m + self.height as f32 * cs;
-        if !(self.origin_x_m.is_finite()
-            && self.origin_y_m.is_finite()
-            && far_x.is_finite()
-            && far_y.is_finite())
-        {
-            return Err(BlobError::BadOrigin);
-        }
+        let cells = super::grid::check_grid(
+            self.width,
+            self.height,
+            self.cell_size_m,
+            self.origin_x_m,
+            self.origin_y_m,
+            |w, h| {
+                let cells = usize::try_from(w)
+                    .ok()?
+                    .checked_mul(usize::try_from(h).ok()?)?;
+                cells.checked_add(BLOB_HEADER_LEN).map(|_| cells)
+            },
+        )?;
         let d = self.max_dist_m;
         if !(d.is_finite() && d > 0.0) {
             return Err(BlobError::BadMaxDist);

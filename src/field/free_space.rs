@@ -34,7 +34,8 @@
 //! after a blob in one file ([`FieldView::parse_prefix`](super::FieldView::parse_prefix) returns
 //! the bytes after the blob; [`FreeSpace::parse`] reads them).
 
-use super::blob::{BLOB_MAX_SIDE, CRC32};
+use super::blob::CRC32;
+use super::grid::check_grid;
 use super::FieldView;
 use crate::gaussian::uniform_f32;
 use crate::pose::Pose;
@@ -154,30 +155,14 @@ impl FreeSpaceGrid {
     /// [`FreeSpaceError::ZeroSize`], [`FreeSpaceError::TooLarge`],
     /// [`FreeSpaceError::BadCellSize`], [`FreeSpaceError::BadOrigin`].
     pub fn validate(&self) -> Result<u32, FreeSpaceError> {
-        if self.width == 0 || self.height == 0 {
-            return Err(FreeSpaceError::ZeroSize);
-        }
-        if self.width > BLOB_MAX_SIDE || self.height > BLOB_MAX_SIDE {
-            return Err(FreeSpaceError::TooLarge);
-        }
-        let cells = self
-            .width
-            .checked_mul(self.height)
-            .ok_or(FreeSpaceError::TooLarge)?;
-        let cs = self.cell_size_m;
-        if !(cs.is_finite() && cs > 0.0 && (1.0 / cs).is_finite()) {
-            return Err(FreeSpaceError::BadCellSize);
-        }
-        let far_x = self.origin_x_m + self.width as f32 * cs;
-        let far_y = self.origin_y_m + self.height as f32 * cs;
-        if !(self.origin_x_m.is_finite()
-            && self.origin_y_m.is_finite()
-            && far_x.is_finite()
-            && far_y.is_finite())
-        {
-            return Err(FreeSpaceError::BadOrigin);
-        }
-        Ok(cells)
+        Ok(check_grid(
+            self.width,
+            self.height,
+            self.cell_size_m,
+            self.origin_x_m,
+            self.origin_y_m,
+            u32::checked_mul,
+        )?)
     }
 }
 

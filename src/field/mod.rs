@@ -20,6 +20,7 @@
 pub mod blob;
 pub mod edt;
 pub mod free_space;
+mod grid;
 pub mod likelihood;
 pub mod prepared;
 pub mod tiled;

@@ -24,7 +24,8 @@
 //! After a failed checksum it looks for the next header candidate inside the rejected bytes, so
 //! a truncated frame costs only itself, not the frame that follows it.
 
-use super::{bump, DecoderStats, EncodeError, LidarPoint};
+use super::sync::HeaderHunt;
+use super::{bump, range_units, room, DecoderStats, EncodeError, LidarPoint};
 use crc::{Algorithm, Crc};
 
 /// Frame header byte.
@@ -110,13 +111,7 @@ impl Ld06Sample {
     /// millimetre; 0 ("no measurement") for NaN, negative, or anything that rounds to 0 mm or
     /// past 65,535 mm.
     pub fn from_range_m(range_m: f32, intensity: u8) -> Self {
-        let mm = range_m * 1000.0;
-        let distance_mm = if (0.5..65_535.5).contains(&mm) {
-            // In [0.5, 65,535.5): rounds to 1..=65,535.
-            (mm + 0.5) as u16
-        } else {
-            0
-        };
+        let distance_mm = range_units(range_m, 1000.0, u16::MAX);
         Self {
             distance_mm,
             intensity: if distance_mm == 0 { 0 } else { intensity },
@@ -290,10 +285,7 @@ impl Ld06Frame {
 /// Byte-at-a-time LD06 stream decoder. See the module docs for the frame and the resync rule.
 #[derive(Clone, Debug)]
 pub struct Ld06Decoder {
-    buf: [u8; FRAME_LEN],
-    len: usize,
-    skipping: bool,
-    stats: DecoderStats,
+    hunt: HeaderHunt<FRAME_LEN>,
     last: Option<Ld06Frame>,
 }
 
@@ -307,18 +299,7 @@ impl Ld06Decoder {
     /// A decoder waiting for a frame header.
     pub const fn new() -> Self {
         Self {
-            buf: [0; FRAME_LEN],
-            len: 0,
-            skipping: false,
-            stats: DecoderStats {
-                bytes: 0,
-                frames_ok: 0,
-                bad_checksum: 0,
-                bad_frames: 0,
-                skipped_bytes: 0,
-                resyncs: 0,
-                points: 0,
-            },
+            hunt: HeaderHunt::new(),
             last: None,
         }
     }
@@ -331,16 +312,17 @@ impl Ld06Decoder {
     pub fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
         let mut rest = bytes;
         while !rest.is_empty() {
-            if self.len >= 2 {
-                let take = (FRAME_LEN - self.len).min(rest.len());
+            let h = &mut self.hunt;
+            if h.len >= 2 {
+                let take = (FRAME_LEN - h.len).min(rest.len());
                 let (head, tail) = rest.split_at(take);
-                if let Some(dst) = self.buf.get_mut(self.len..self.len + take) {
+                if let Some(dst) = h.buf.get_mut(h.len..h.len + take) {
                     dst.copy_from_slice(head);
                 }
-                self.stats.bytes = self.stats.bytes.saturating_add(take as u32);
-                self.len += take;
+                h.counter.stats.bytes = h.counter.stats.bytes.saturating_add(take as u32);
+                h.len += take;
                 rest = tail;
-                if self.len == FRAME_LEN {
+                if h.len == FRAME_LEN {
                     self.complete(&mut on_point);
                 }
             } else if let Some((&b, tail)) = rest.split_first() {
@@ -353,58 +335,19 @@ impl Ld06Decoder {
     /// Feeds one byte (see [`Ld06Decoder::feed`]).
     #[inline]
     pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
-        bump(&mut self.stats.bytes);
-        match self.len {
-            0 => {
-                if byte == HEADER {
-                    self.buf[0] = byte;
-                    self.len = 1;
-                } else {
-                    self.skip(1);
-                }
-            }
-            1 => {
-                if byte == VER_LEN {
-                    self.buf[1] = byte;
-                    self.len = 2;
-                } else {
-                    // The 0x54 was not a header; this byte may be one.
-                    self.skip(1);
-                    if byte == HEADER {
-                        self.len = 1;
-                    } else {
-                        self.len = 0;
-                        self.skip(1);
-                    }
-                }
-            }
-            n => {
-                if let Some(slot) = self.buf.get_mut(n) {
-                    *slot = byte;
-                }
-                self.len = n + 1;
-                if self.len == FRAME_LEN {
-                    self.complete(on_point);
-                }
-            }
+        if self.hunt.push(byte, HEADER, |b| b == VER_LEN) {
+            self.complete(on_point);
         }
-    }
-
-    fn skip(&mut self, n: usize) {
-        if !self.skipping {
-            bump(&mut self.stats.resyncs);
-            self.skipping = true;
-        }
-        self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(n as u32);
     }
 
     fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
         // The header is known good (the decoder only buffers after `0x54 0x2C`): check the CRC
         // in place, then build the frame once, where it is kept.
-        let crc_ok = crc8(self.buf.get(..FRAME_LEN - 1).unwrap_or(&[])) == self.buf[FRAME_LEN - 1];
+        let buf = &self.hunt.buf;
+        let crc_ok = crc8(buf.get(..FRAME_LEN - 1).unwrap_or(&[])) == buf[FRAME_LEN - 1];
         let parsed = if crc_ok {
             let prev = self.last.take();
-            let f = self.last.insert(Ld06Frame::fields(&self.buf));
+            let f = self.last.insert(Ld06Frame::fields(buf));
             if f.start_angle_cdeg < FULL_TURN_CDEG && f.end_angle_cdeg < FULL_TURN_CDEG {
                 Ok(())
             } else {
@@ -417,32 +360,24 @@ impl Ld06Decoder {
         };
         match parsed {
             Ok(()) => {
-                self.len = 0;
-                self.skipping = false;
-                bump(&mut self.stats.frames_ok);
+                self.hunt.accept();
+                let stats = &mut self.hunt.counter.stats;
+                bump(&mut stats.frames_ok);
                 if let Some(frame) = &self.last {
                     frame.points(on_point);
                 }
-                self.stats.points = self.stats.points.saturating_add(POINTS_PER_FRAME as u32);
+                stats.points = stats.points.saturating_add(POINTS_PER_FRAME as u32);
             }
             Err(Ld06Error::AngleOutOfRange) => {
                 // The CRC vouches for the bytes: the frame is whole, only its content is bad.
-                self.len = 0;
-                bump(&mut self.stats.bad_frames);
+                self.hunt.drop_frame();
+                bump(&mut self.hunt.counter.stats.bad_frames);
             }
             Err(_) => {
-                bump(&mut self.stats.bad_checksum);
+                bump(&mut self.hunt.counter.stats.bad_checksum);
                 // Re-examine the rejected bytes after the header: keep the first `0x54` that is
                 // followed by `0x2C` (or that ends the buffer) as the start of the next frame.
-                let rest = self.buf.get(1..).unwrap_or(&[]);
-                let next = rest
-                    .windows(2)
-                    .position(|w| w == [HEADER, VER_LEN])
-                    .or_else(|| (rest.last() == Some(&HEADER)).then(|| rest.len() - 1))
-                    .map_or(FRAME_LEN, |p| p + 1);
-                self.skip(next);
-                self.buf.copy_within(next.., 0);
-                self.len = FRAME_LEN - next;
+                self.hunt.rehunt(HEADER, |b| b == VER_LEN);
             }
         }
     }
@@ -450,12 +385,12 @@ impl Ld06Decoder {
     /// The counters so far. `bytes == 47 · (frames_ok + bad_frames) + skipped_bytes +`
     /// [`Ld06Decoder::buffered`] always holds.
     pub fn stats(&self) -> DecoderStats {
-        self.stats
+        self.hunt.counter.stats
     }
 
     /// Bytes of a partial frame held, waiting for the rest.
     pub fn buffered(&self) -> usize {
-        self.len
+        self.hunt.len
     }
 
     /// The last frame whose CRC passed (speed and timestamp included), if any.
@@ -497,12 +432,7 @@ pub fn encode_revolution(
         return Err(EncodeError::BadSampleCount(n));
     }
     let needed = revolution_len(n);
-    if out.len() < needed {
-        return Err(EncodeError::BufferTooSmall {
-            needed,
-            given: out.len(),
-        });
-    }
+    let out = room(out, needed)?;
     let step_cdeg = u32::from(FULL_TURN_CDEG) / n as u32;
     for (f, (chunk, dst)) in samples
         .chunks_exact(POINTS_PER_FRAME)

@@ -44,6 +44,7 @@ pub mod assembler;
 pub mod io;
 pub mod ld06;
 pub mod rplidar;
+mod sync;
 pub mod xv11;
 
 pub use assembler::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution, ScanAssembler};
@@ -132,6 +133,13 @@ impl core::error::Error for EncodeError {}
 pub trait StreamDecoder {
     /// Feeds one byte; `on_point` is called for each point of a frame this byte completed.
     fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint));
+    /// Feeds received bytes; the same as [`StreamDecoder::push_byte`] for each byte in turn
+    /// (a decoder may take a frame's body in one block, as the LD06 decoder does).
+    fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
+        for &b in bytes {
+            self.push_byte(b, &mut on_point);
+        }
+    }
     /// The decoder's counters.
     fn stats(&self) -> DecoderStats;
 }
@@ -143,6 +151,10 @@ macro_rules! stream_decoder {
             fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
                 <$t>::push_byte(self, byte, on_point)
             }
+            #[inline]
+            fn feed(&mut self, bytes: &[u8], on_point: impl FnMut(LidarPoint)) {
+                <$t>::feed(self, bytes, on_point)
+            }
             fn stats(&self) -> DecoderStats {
                 <$t>::stats(self)
             }
@@ -153,8 +165,54 @@ stream_decoder!(ld06::Ld06Decoder);
 stream_decoder!(rplidar::RplidarDecoder);
 stream_decoder!(xv11::Xv11Decoder);
 
+/// `out[..needed]`: the room an encoder writes into.
+///
+/// # Errors
+/// [`EncodeError::BufferTooSmall`] when `out` is shorter than `needed`.
+pub(crate) fn room(out: &mut [u8], needed: usize) -> Result<&mut [u8], EncodeError> {
+    let given = out.len();
+    out.get_mut(..needed)
+        .ok_or(EncodeError::BufferTooSmall { needed, given })
+}
+
+/// A range (metres) in a protocol's distance unit (`units_per_m` to the metre), rounded to the
+/// nearest unit; 0 ("no measurement") for NaN, negative, or anything that rounds to 0 or past
+/// `max_units`. What each encoder writes for a range.
+pub(crate) fn range_units(range_m: f32, units_per_m: f32, max_units: u16) -> u16 {
+    let v = range_m * units_per_m;
+    if (0.5..f32::from(max_units) + 0.5).contains(&v) {
+        // In [0.5, max + 0.5): rounds to 1..=max.
+        (v + 0.5) as u16
+    } else {
+        0
+    }
+}
+
 /// Adds one to a counter, saturating (counters never wrap to a misleading small value).
 #[inline(always)]
 pub(crate) fn bump(counter: &mut u32) {
     *counter = counter.saturating_add(1);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::range_units;
+
+    #[test]
+    fn range_units_rounds_to_the_unit_and_zeroes_what_the_field_cannot_carry() {
+        // Millimetres: 1.2344 m → 1,234 mm, 1.2346 m → 1,235 mm.
+        assert_eq!(range_units(1.2344, 1000.0, u16::MAX), 1234);
+        assert_eq!(range_units(1.2346, 1000.0, u16::MAX), 1235);
+        // Quarter millimetres: 1 m is 4,000.
+        assert_eq!(range_units(1.0, 4000.0, u16::MAX), 4000);
+        // Below half a unit, NaN, negative: no measurement.
+        assert_eq!(range_units(0.0004, 1000.0, u16::MAX), 0);
+        assert_eq!(range_units(f32::NAN, 1000.0, u16::MAX), 0);
+        assert_eq!(range_units(-2.0, 1000.0, u16::MAX), 0);
+        // The field's largest value, and past it (a 14-bit field: 16,383 mm).
+        assert_eq!(range_units(16.383, 1000.0, 16_383), 16_383);
+        assert_eq!(range_units(16.384, 1000.0, 16_383), 0);
+        assert_eq!(range_units(65.535, 1000.0, u16::MAX), u16::MAX);
+        assert_eq!(range_units(65.536, 1000.0, u16::MAX), 0);
+    }
 }

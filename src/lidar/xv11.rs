@@ -23,7 +23,8 @@
 //! The decoder waits for `0xFA` followed by a valid index byte. After a failed checksum it looks
 //! for the next such pair inside the rejected bytes.
 
-use super::{bump, DecoderStats, EncodeError, LidarPoint};
+use super::sync::HeaderHunt;
+use super::{bump, range_units, room, DecoderStats, EncodeError, LidarPoint};
 
 /// Start byte of a packet.
 pub const START: u8 = 0xFA;
@@ -110,10 +111,10 @@ impl Xv11Reading {
     /// millimetre; NaN, negative, 0 mm and anything past 16,383 mm become an invalid reading
     /// (error code 0, strength 0).
     pub fn from_range_m(range_m: f32, strength: u16) -> Self {
-        let mm = range_m * 1000.0;
-        if (0.5..f32::from(MAX_DISTANCE_MM) + 0.5).contains(&mm) {
+        let distance_mm = range_units(range_m, 1000.0, MAX_DISTANCE_MM);
+        if distance_mm != 0 {
             Self {
-                distance_mm: (mm + 0.5) as u16,
+                distance_mm,
                 invalid: false,
                 strength_warning: false,
                 strength,
@@ -190,13 +191,7 @@ impl Xv11Packet {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
-        let given = out.len();
-        let o = out
-            .get_mut(..PACKET_LEN)
-            .ok_or(EncodeError::BufferTooSmall {
-                needed: PACKET_LEN,
-                given,
-            })?;
+        let o = room(out, PACKET_LEN)?;
         let [s0, s1] = self.speed_rpm_q6.to_le_bytes();
         if let Some(head) = o.get_mut(..4) {
             head.copy_from_slice(&[START, FIRST_INDEX.wrapping_add(self.packet), s0, s1]);
@@ -247,12 +242,7 @@ pub fn encode_revolution(
     speed_rpm_q6: u16,
     out: &mut [u8],
 ) -> Result<usize, EncodeError> {
-    if out.len() < REVOLUTION_LEN {
-        return Err(EncodeError::BufferTooSmall {
-            needed: REVOLUTION_LEN,
-            given: out.len(),
-        });
-    }
+    let out = room(out, REVOLUTION_LEN)?;
     for (p, (chunk, dst)) in readings
         .chunks_exact(READINGS_PER_PACKET)
         .zip(out.chunks_exact_mut(PACKET_LEN))
@@ -272,10 +262,7 @@ pub fn encode_revolution(
 /// Byte-at-a-time XV-11 stream decoder. See the module docs.
 #[derive(Clone, Debug)]
 pub struct Xv11Decoder {
-    buf: [u8; PACKET_LEN],
-    len: usize,
-    skipping: bool,
-    stats: DecoderStats,
+    hunt: HeaderHunt<PACKET_LEN>,
     last_speed_rpm_q6: Option<u16>,
 }
 
@@ -289,18 +276,7 @@ impl Xv11Decoder {
     /// A decoder waiting for a start byte.
     pub const fn new() -> Self {
         Self {
-            buf: [0; PACKET_LEN],
-            len: 0,
-            skipping: false,
-            stats: DecoderStats {
-                bytes: 0,
-                frames_ok: 0,
-                bad_checksum: 0,
-                bad_frames: 0,
-                skipped_bytes: 0,
-                resyncs: 0,
-                points: 0,
-            },
+            hunt: HeaderHunt::new(),
             last_speed_rpm_q6: None,
         }
     }
@@ -315,73 +291,26 @@ impl Xv11Decoder {
 
     /// Feeds one byte (see [`Xv11Decoder::feed`]).
     pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
-        bump(&mut self.stats.bytes);
-        match self.len {
-            0 => {
-                if byte == START {
-                    self.buf[0] = byte;
-                    self.len = 1;
-                } else {
-                    self.skip(1);
-                }
-            }
-            1 => {
-                if is_index(byte) {
-                    self.buf[1] = byte;
-                    self.len = 2;
-                } else {
-                    self.skip(1);
-                    if byte == START {
-                        self.len = 1;
-                    } else {
-                        self.len = 0;
-                        self.skip(1);
-                    }
-                }
-            }
-            n => {
-                if let Some(slot) = self.buf.get_mut(n) {
-                    *slot = byte;
-                }
-                self.len = n + 1;
-                if self.len == PACKET_LEN {
-                    self.complete(on_point);
-                }
-            }
+        if self.hunt.push(byte, START, is_index) {
+            self.complete(on_point);
         }
-    }
-
-    fn skip(&mut self, n: usize) {
-        if !self.skipping {
-            bump(&mut self.stats.resyncs);
-            self.skipping = true;
-        }
-        self.stats.skipped_bytes = self.stats.skipped_bytes.saturating_add(n as u32);
     }
 
     fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
-        match Xv11Packet::parse(&self.buf) {
+        match Xv11Packet::parse(&self.hunt.buf) {
             Ok(p) => {
-                self.len = 0;
-                self.skipping = false;
-                bump(&mut self.stats.frames_ok);
+                self.hunt.accept();
+                let stats = &mut self.hunt.counter.stats;
+                bump(&mut stats.frames_ok);
                 self.last_speed_rpm_q6 = Some(p.speed_rpm_q6);
                 for j in 0..READINGS_PER_PACKET {
                     on_point(p.point(j));
                 }
-                self.stats.points = self.stats.points.saturating_add(READINGS_PER_PACKET as u32);
+                stats.points = stats.points.saturating_add(READINGS_PER_PACKET as u32);
             }
             Err(_) => {
-                bump(&mut self.stats.bad_checksum);
-                let rest = self.buf.get(1..).unwrap_or(&[]);
-                let next = rest
-                    .windows(2)
-                    .position(|w| matches!(w, [START, i] if is_index(*i)))
-                    .or_else(|| (rest.last() == Some(&START)).then(|| rest.len() - 1))
-                    .map_or(PACKET_LEN, |p| p + 1);
-                self.skip(next);
-                self.buf.copy_within(next.., 0);
-                self.len = PACKET_LEN - next;
+                bump(&mut self.hunt.counter.stats.bad_checksum);
+                self.hunt.rehunt(START, is_index);
             }
         }
     }
@@ -389,12 +318,12 @@ impl Xv11Decoder {
     /// The counters. `bytes == 22 · frames_ok + skipped_bytes +` [`Xv11Decoder::buffered`]
     /// always holds (an index is checked before the packet is buffered, so `bad_frames` stays 0).
     pub fn stats(&self) -> DecoderStats {
-        self.stats
+        self.hunt.counter.stats
     }
 
     /// Bytes of a partial packet held.
     pub fn buffered(&self) -> usize {
-        self.len
+        self.hunt.len
     }
 
     /// Rotation speed of the last good packet, rpm × 64.

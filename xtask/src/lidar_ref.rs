@@ -12,25 +12,8 @@ mod lidar_plan;
 use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
 use beamfield::Pose;
 use demo_plan::POSES;
+use lidar_plan::segment::{MAX_RANGE_M, SCANS};
 use lidar_plan::BEAMS;
-
-/// One real scan of the log with its logged laser pose (the firmware's type, same fields).
-pub struct DemoScan {
-    /// Index of the FLASER line in the log.
-    pub log_index: u32,
-    /// Logged laser pose `[x_m, y_m, theta_rad]`.
-    pub pose: [f32; 3],
-    /// The ranges, metres.
-    pub ranges_m: [f32; BEAMS],
-}
-
-/// The log's scans sent as the stream (generated; a range of 3.14 m is not π).
-#[allow(clippy::approx_constant)]
-mod segment {
-    use super::DemoScan;
-    include!("../../firmware/assets/lidar_segment.rs");
-}
-use segment::{MAX_RANGE_M, SCANS};
 
 /// Points per LD06 revolution in the stream: one per degree (the encoder's 1° layout).
 const SAMPLES: usize = 360;

@@ -1,47 +1,22 @@
 //! `cargo xtask willow`: a map that does not fit the STM32F405 raw, linked tiled. Builds
 //! `firmware/src/bin/willow.rs` with the STM32F405 layout (`memory-stm32f405.x`: an image
-//! that does not fit 1 MiB of flash is a link error), runs it on QEMU's `netduinoplus2`, and
-//! compares every score it prints with the host's run of the same plan
-//! (`firmware/src/willow_plan.rs`) on the same blob, bit for bit.
+//! that does not fit 1 MiB of flash is a link error) and runs it on QEMU's `netduinoplus2`
+//! (the demo's `build_and_run`), then compares every score it prints with the host's run of
+//! the same plan (`firmware/src/willow_plan.rs`) on the same blob, bit for bit.
 
 #[path = "../../firmware/src/willow_plan.rs"]
 #[allow(dead_code)]
 mod willow_plan;
 
-use super::demo::Board;
-use super::{capture, ensure_qemu, ensure_target, repo_root, run_to_files, show, Result};
-use super::{cargo, FIRMWARE_TARGET, QEMU_TIMEOUT_S};
-use std::path::PathBuf;
-use std::process::Command;
+use super::demo::{build_and_run, Board};
+use super::{repo_root, Result};
 
 /// STM32F405 flash, bytes.
 const FLASH_BYTES: u64 = 1 << 20;
 
 /// Builds and runs the program, then checks its scores against the host's.
 pub fn willow() -> Result {
-    ensure_qemu()?;
-    ensure_target(FIRMWARE_TARGET)?;
     let board = Board::Netduinoplus2;
-    let mut cmd = cargo();
-    cmd.current_dir(repo_root().join("firmware"))
-        .env("BEAMFIELD_MEMORY_X", board.memory_x())
-        .args([
-            "build",
-            "--release",
-            "--target",
-            FIRMWARE_TARGET,
-            "--bin",
-            "willow",
-            "--message-format=json-render-diagnostics",
-        ]);
-    eprintln!("+ (cd firmware && {})", show(&cmd));
-    let out = capture(&mut cmd)?;
-    let elf = out
-        .lines()
-        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .filter(|m| m["reason"] == "compiler-artifact" && m["target"]["name"] == "willow")
-        .find_map(|m| m["executable"].as_str().map(PathBuf::from))
-        .ok_or("cargo built no `willow` executable")?;
     let blob_path = repo_root().join("firmware/assets/willow-tiled.bin");
     let blob = std::fs::read(&blob_path).map_err(|e| format!("{}: {e}", blob_path.display()))?;
     let view = beamfield::FieldView::parse(&blob).map_err(|e| format!("willow blob: {e}"))?;
@@ -51,23 +26,7 @@ pub fn willow() -> Result {
         if raw_len > FLASH_BYTES { "more than" } else { "within" },
         blob.len()
     );
-    let (code, out, err) = run_to_files(
-        Command::new("timeout")
-            .args([
-                QEMU_TIMEOUT_S,
-                "qemu-system-arm",
-                "-machine",
-                board.machine(),
-            ])
-            .args([
-                "-nographic",
-                "-semihosting-config",
-                "enable=on,target=native",
-            ])
-            .args(["-icount", "shift=0", "-kernel"])
-            .arg(&elf),
-        "willow",
-    )?;
+    let (code, out, err) = build_and_run(board, "willow")?;
     print!("{out}");
     eprint!("{err}");
     if code != 0 {

@@ -112,6 +112,33 @@ fn synthetic(rng: &mut Rng, ranges: &mut [f32; BEAMS], z_star: &mut [f32; BEAMS]
     }
 }
 
+/// One decode-plus-assembly region (14–16): a new decoder of type `D` is fed `stream` and every
+/// point it hands out is pushed into a new [`ScanAssembler`](beamfield::lidar::ScanAssembler) on
+/// `layout`, all between the region marks. Returns the scans finished and the ranges binned, or
+/// `None` when the assembler rejected the layout.
+#[inline(always)]
+fn decode_assemble_region<D, const N: usize>(
+    stream: &[u8],
+    layout: &BeamLayout<N>,
+    config: beamfield::lidar::AssemblerConfig,
+) -> Option<(u32, u32)>
+where
+    D: beamfield::lidar::StreamDecoder + Default,
+{
+    bench_mark_start();
+    let mut dec = D::default();
+    let mut asm = beamfield::lidar::ScanAssembler::new(layout, config).ok()?;
+    let mut scans = 0u32;
+    dec.feed(stream, |p| {
+        if let Some(s) = asm.push(p) {
+            black_box(s);
+            scans += 1;
+        }
+    });
+    bench_mark_end();
+    Some((scans, asm.stats().accepted))
+}
+
 /// Regions 12–16: the LiDAR decoders and the assembler, per received byte. Returns the bytes of
 /// the three streams, or `None` if an encoder or the layout was rejected. Not inlined.
 #[inline(never)]
@@ -120,7 +147,7 @@ fn lidar_regions() -> Option<[usize; 3]> {
     use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
     use beamfield::lidar::rplidar::{self, RplidarDecoder};
     use beamfield::lidar::xv11::{self, Xv11Decoder, Xv11Reading};
-    use beamfield::lidar::{AssemblerConfig, ScanAssembler};
+    use beamfield::lidar::AssemblerConfig;
     const REVS: usize = REAL_SCANS;
     const POINTS: usize = 360;
     let layout = BeamLayout::<{ real::BEAMS }>::uniform(
@@ -163,18 +190,8 @@ fn lidar_regions() -> Option<[usize; 3]> {
         pts += 1;
     });
     bench_mark_end();
-    bench_mark_start();
-    let mut dec = Ld06Decoder::new();
-    let mut asm = ScanAssembler::new(&layout, config).ok()?;
-    let mut ld06_scans = 0u32;
-    dec.feed(stream, |p| {
-        if let Some(s) = asm.push(p) {
-            black_box(s);
-            ld06_scans += 1;
-        }
-    });
-    bench_mark_end();
-    let ld06_accepted = asm.stats().accepted;
+    let (ld06_scans, ld06_accepted) =
+        decode_assemble_region::<Ld06Decoder, _>(stream, &layout, config)?;
 
     // RPLIDAR: the scan descriptor, then nodes.
     let mut n = 0;
@@ -186,18 +203,8 @@ fn lidar_regions() -> Option<[usize; 3]> {
     }
     let rp_len = n;
     let stream = black_box(buf.get(..n)?);
-    bench_mark_start();
-    let mut dec = RplidarDecoder::new();
-    let mut asm = ScanAssembler::new(&layout, config).ok()?;
-    let mut rp_scans = 0u32;
-    dec.feed(stream, |p| {
-        if let Some(s) = asm.push(p) {
-            black_box(s);
-            rp_scans += 1;
-        }
-    });
-    bench_mark_end();
-    let rp_accepted = asm.stats().accepted;
+    let (rp_scans, rp_accepted) =
+        decode_assemble_region::<RplidarDecoder, _>(stream, &layout, config)?;
 
     // XV-11 at 300 rpm.
     let mut n = 0;
@@ -209,18 +216,8 @@ fn lidar_regions() -> Option<[usize; 3]> {
     }
     let xv_len = n;
     let stream = black_box(buf.get(..n)?);
-    bench_mark_start();
-    let mut dec = Xv11Decoder::new();
-    let mut asm = ScanAssembler::new(&layout, config).ok()?;
-    let mut xv_scans = 0u32;
-    dec.feed(stream, |p| {
-        if let Some(s) = asm.push(p) {
-            black_box(s);
-            xv_scans += 1;
-        }
-    });
-    bench_mark_end();
-    let xv_accepted = asm.stats().accepted;
+    let (xv_scans, xv_accepted) =
+        decode_assemble_region::<Xv11Decoder, _>(stream, &layout, config)?;
 
     println!(
         "insns: lidar: {} real scans as revolutions of {} points; byte sum {}; ld06 {} bytes, {} points, {} scans, {} ranges binned; rplidar {} bytes, {} scans, {} binned; xv11 {} bytes, {} scans, {} binned",

@@ -41,25 +41,8 @@ mod demo_plan;
 #[path = "../lidar_plan.rs"]
 mod lidar_plan;
 use demo_plan::{offset, POSES};
+use lidar_plan::segment::{MAX_RANGE_M, SCANS};
 use lidar_plan::{Setup, BEAMS};
-
-/// One real scan of the log with its logged (corrected) laser pose (`assets/lidar_segment.rs`).
-pub struct DemoScan {
-    /// Index of the FLASER line in the log.
-    pub log_index: u32,
-    /// Logged laser pose `[x_m, y_m, theta_rad]`.
-    pub pose: [f32; 3],
-    /// The 180 ranges, metres (the log's max-range value means "no return").
-    pub ranges_m: [f32; BEAMS],
-}
-
-/// The log's scans sent as the stream (generated; a range of 3.14 m is not π).
-#[allow(clippy::approx_constant)]
-mod segment {
-    use super::DemoScan;
-    include!("../../assets/lidar_segment.rs");
-}
-use segment::{MAX_RANGE_M, SCANS};
 
 /// The 5 cm distance field of the Intel map (the demo's).
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
