@@ -370,7 +370,10 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
         return Err(BlobError::HeaderChecksum);
     }
     let encoding = byte(head, 32);
-    if encoding != ENCODING_U8_LINEAR && encoding != super::tiled::ENCODING_TILED {
+    // Encoding 2 is read only with the `tiled-field` feature (on by default).
+    let known = encoding == ENCODING_U8_LINEAR
+        || (cfg!(feature = "tiled-field") && encoding == super::tiled::ENCODING_TILED);
+    if !known {
         return Err(BlobError::UnsupportedEncoding(encoding));
     }
     if byte(head, 33) != 0 || byte(head, 34) != 0 || byte(head, 35) != 0 {
@@ -386,11 +389,14 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
     };
     let cells = header.validate()?;
     let stated = usize::try_from(u32_at(36)).map_err(|_| BlobError::PayloadLengthMismatch)?;
+    #[cfg(feature = "tiled-field")]
     let possible = if encoding == ENCODING_U8_LINEAR {
         stated == cells
     } else {
         super::tiled::payload_len_possible(&header, stated)
     };
+    #[cfg(not(feature = "tiled-field"))]
+    let possible = stated == cells;
     if !possible {
         return Err(BlobError::PayloadLengthMismatch);
     }
@@ -521,5 +527,21 @@ mod tests {
             Err(BlobError::CellCountMismatch)
         );
         assert!(out.iter().all(|&b| b == 0));
+    }
+
+    /// Without the `tiled-field` feature a tiled blob is a typed error, not a misread.
+    #[cfg(not(feature = "tiled-field"))]
+    #[test]
+    fn tiled_blob_needs_the_feature() {
+        use super::super::tiled::{emit_blob_tiled, tiled_max_len, tiled_scratch_len};
+        let (h, _) = sample();
+        let codes = [0, 1, 2, 253, 254, 255];
+        let mut scratch = vec![0u32; tiled_scratch_len(&h).unwrap()];
+        let mut out = vec![0u8; tiled_max_len(&h).unwrap()];
+        let n = emit_blob_tiled(&h, &codes, &mut scratch, &mut out).unwrap();
+        assert_eq!(
+            super::super::FieldView::parse(&out[..n]).err(),
+            Some(BlobError::UnsupportedEncoding(2))
+        );
     }
 }

@@ -40,6 +40,7 @@
 //! NaN) is scored by a per-beam `f32` path with the same result semantics.
 
 use super::likelihood::{LikelihoodField, LIKELIHOOD_TABLE_LEN};
+#[cfg(feature = "tiled-field")]
 use super::tiled::TiledCells;
 use super::view::Cells;
 use crate::math;
@@ -246,6 +247,7 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
         // One loop per encoding, chosen once per pose: no dispatch per beam.
         match self.field.view().cells() {
             Cells::Raw(codes) => self.fixed_path_over::<_, E, FIX16>(codes, ax, ay, c, s, f, each),
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(tiles) => {
                 self.fixed_path_over::<_, E, FIX16>(tiles, ax, ay, c, s, f, each)
             }
@@ -373,6 +375,7 @@ impl CellRead for &[u8] {
     }
 }
 
+#[cfg(feature = "tiled-field")]
 impl CellRead for TiledCells<'_> {
     /// Encoding 2: both coordinates checked, then the tile index and the pool.
     #[inline(always)]

@@ -203,6 +203,7 @@ fn preamble(pool_tiles: u32) -> [u8; TILED_PREAMBLE_LEN] {
 
 /// Whether a payload length is possible for a tiled blob of `header`'s grid (checked before
 /// the payload is read, like encoding 1's `W·H` rule).
+#[cfg(feature = "tiled-field")]
 pub(crate) fn payload_len_possible(header: &FieldHeader, len: usize) -> bool {
     let Ok((_, _, tiles)) = tile_grid(header) else {
         return false;
@@ -218,6 +219,7 @@ pub(crate) fn payload_len_possible(header: &FieldHeader, len: usize) -> bool {
 
 /// A validated tiled payload: every index entry names a pool tile, so a lookup of a cell on
 /// the map never misses (the accessors still return `Option`: no panic path whatever).
+#[cfg(feature = "tiled-field")]
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TiledCells<'a> {
     /// The tile index (`2·TW·TH` bytes: u16 little-endian pool tile numbers) followed by the
@@ -229,6 +231,7 @@ pub(crate) struct TiledCells<'a> {
     tiles_w: u32,
 }
 
+#[cfg(feature = "tiled-field")]
 impl<'a> TiledCells<'a> {
     /// Checks a tiled payload (its length and CRC already checked against the header).
     ///
@@ -286,6 +289,7 @@ impl<'a> TiledCells<'a> {
 }
 
 #[cfg(test)]
+#[cfg(feature = "tiled-field")]
 mod tests {
     use super::super::blob::{parse_blob, CRC32};
     use super::super::view::FieldView;

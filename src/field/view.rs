@@ -1,6 +1,7 @@
 //! [`FieldView`]: a validated, zero-copy view of a distance-field blob (in flash or anywhere).
 
 use super::blob::{parse_blob, BlobError, FieldHeader, CODE_MAX, ENCODING_U8_LINEAR};
+#[cfg(feature = "tiled-field")]
 use super::tiled::{TiledCells, ENCODING_TILED};
 
 /// Where a view's codes live: one byte per cell (encoding 1) or deduplicated tiles
@@ -9,7 +10,8 @@ use super::tiled::{TiledCells, ENCODING_TILED};
 pub(crate) enum Cells<'a> {
     /// Encoding 1: `width · height` codes, row-major.
     Raw(&'a [u8]),
-    /// Encoding 2: a tile index and a tile pool.
+    /// Encoding 2: a tile index and a tile pool (feature `tiled-field`).
+    #[cfg(feature = "tiled-field")]
     Tiled(TiledCells<'a>),
 }
 
@@ -71,9 +73,16 @@ impl<'a> FieldView<'a> {
             parsed.payload,
             parsed.trailing,
         );
+        #[cfg(feature = "tiled-field")]
         let cells = if encoding == ENCODING_TILED {
             Cells::Tiled(TiledCells::parse(&header, payload)?)
         } else {
+            Cells::Raw(payload)
+        };
+        // Without the feature `parse_blob` accepts encoding 1 only.
+        #[cfg(not(feature = "tiled-field"))]
+        let cells = {
+            let _ = encoding;
             Cells::Raw(payload)
         };
         let stride = usize::try_from(header.width).map_err(|_| BlobError::TooLarge)?;
@@ -83,6 +92,7 @@ impl<'a> FieldView<'a> {
             cells,
             raw: match cells {
                 Cells::Raw(c) => c,
+                #[cfg(feature = "tiled-field")]
                 Cells::Tiled(_) => &[],
             },
             width_f: header.width as f32,
@@ -139,15 +149,18 @@ impl<'a> FieldView<'a> {
     pub fn raw_codes(&self) -> Option<&'a [u8]> {
         match self.cells {
             Cells::Raw(c) => Some(c),
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(_) => None,
         }
     }
 
     /// The blob's distance encoding: [`ENCODING_U8_LINEAR`] (1) or
-    /// [`ENCODING_TILED`] (2). Both give the same codes.
+    /// [`ENCODING_TILED`](super::tiled::ENCODING_TILED) (2, read only with the `tiled-field`
+    /// feature). Both give the same codes.
     pub fn encoding(&self) -> u8 {
         match self.cells {
             Cells::Raw(_) => ENCODING_U8_LINEAR,
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(_) => ENCODING_TILED,
         }
     }
@@ -156,6 +169,7 @@ impl<'a> FieldView<'a> {
     pub fn pool_tiles(&self) -> Option<usize> {
         match self.cells {
             Cells::Raw(_) => None,
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(t) => Some(t.pool_tiles()),
         }
     }
@@ -196,8 +210,11 @@ impl<'a> FieldView<'a> {
     #[inline(never)]
     #[cold]
     fn code_slow(&self, ix: u32, iy: u32) -> Option<u8> {
+        #[cfg(not(feature = "tiled-field"))]
+        let _ = (ix, iy);
         match self.cells {
             Cells::Raw(_) => None,
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(t) => t.code(ix, iy),
         }
     }
@@ -208,6 +225,7 @@ impl<'a> FieldView<'a> {
     pub(crate) fn code_at_index(&self, i: usize) -> Option<u8> {
         match self.cells {
             Cells::Raw(codes) => codes.get(i).copied(),
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(t) => {
                 // Out-of-bounds `i` of a raw blob never reaches here (see the raw arm).
                 let iy = i.checked_div(self.stride)?;

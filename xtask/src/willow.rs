@@ -32,6 +32,8 @@ pub fn willow() -> Result {
             FIRMWARE_TARGET,
             "--bin",
             "willow",
+            "--features",
+            "tiled",
             "--message-format=json-render-diagnostics",
         ]);
     eprintln!("+ (cd firmware && {})", show(&cmd));
