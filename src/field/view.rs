@@ -155,7 +155,7 @@ impl<'a> FieldView<'a> {
     }
 
     /// The blob's distance encoding: [`ENCODING_U8_LINEAR`] (1) or
-    /// [`ENCODING_TILED`](super::tiled::ENCODING_TILED) (2, read only with the `tiled-field`
+    /// [`tiled::ENCODING_TILED`](super::tiled::ENCODING_TILED) (2, read only with the `tiled-field`
     /// feature). Both give the same codes.
     pub fn encoding(&self) -> u8 {
         match self.cells {
