@@ -43,6 +43,8 @@ pub struct FieldView<'a> {
     step_m: f32,
     /// Code steps per cell length: `cell_size / step`.
     steps_per_cell: f32,
+    /// A tiled blob's clamp code (0: none).
+    clamp_code: u8,
 }
 
 impl<'a> FieldView<'a> {
@@ -67,15 +69,16 @@ impl<'a> FieldView<'a> {
     /// As [`FieldView::parse`], without [`BlobError::TrailingBytes`].
     pub fn parse_prefix(bytes: &'a [u8]) -> Result<(Self, &'a [u8]), BlobError> {
         let parsed = parse_blob(bytes)?;
-        let (header, encoding, payload, rest) = (
+        let (header, encoding, clamp_code, payload, rest) = (
             parsed.header,
             parsed.encoding,
+            parsed.clamp_code,
             parsed.payload,
             parsed.trailing,
         );
         #[cfg(feature = "tiled-field")]
         let cells = if encoding == ENCODING_TILED {
-            Cells::Tiled(TiledCells::parse(&header, payload)?)
+            Cells::Tiled(TiledCells::parse(&header, payload, clamp_code)?)
         } else {
             Cells::Raw(payload)
         };
@@ -103,6 +106,7 @@ impl<'a> FieldView<'a> {
             inv_cell_size: 1.0 / header.cell_size_m,
             step_m,
             steps_per_cell: header.cell_size_m / step_m,
+            clamp_code,
         };
         Ok((view, rest))
     }
@@ -136,6 +140,22 @@ impl<'a> FieldView<'a> {
     /// most half of it.
     pub fn step_m(&self) -> f32 {
         self.step_m
+    }
+
+    /// The clamp code of a tiled blob built with a clamp distance (`beamfield field build
+    /// --clamp-m`): codes never exceed it, and a cell whose code equals it is **at least**
+    /// [`FieldView::clamp_m`] from the nearest occupied cell (its true distance may be anything
+    /// up to `d_max` or beyond). `None` without a clamp (every distance below `d_max` exact to
+    /// the code).
+    pub fn clamp_code(&self) -> Option<u8> {
+        (self.clamp_code != 0).then_some(self.clamp_code)
+    }
+
+    /// The clamp distance, metres (`clamp code · step`): distances at or beyond it are stored
+    /// as it, so [`FieldView::distance_m`] reads `≥ clamp_m` as `clamp_m`. `None` without a
+    /// clamp.
+    pub fn clamp_m(&self) -> Option<f32> {
+        self.clamp_code().map(|c| f32::from(c) * self.step_m)
     }
 
     /// The payload of an encoding-1 blob: one code per cell, row-major, row 0 = lowest y.
@@ -298,7 +318,8 @@ impl<'a> FieldView<'a> {
     /// the cell's code times [`FieldView::step_m`], plus the exact Euclidean distance from the
     /// point to the map's rectangle when it lies off the map.
     ///
-    /// Inside the map the result is at most `d_max`; NaN input gives NaN.
+    /// Inside the map the result is at most `d_max`, or at most [`FieldView::clamp_m`] for a
+    /// blob with a clamp, where that value means "this far or farther"; NaN input gives NaN.
     pub fn distance_m(&self, x_m: f32, y_m: f32) -> f32 {
         let (gx, gy) = self.to_grid(x_m, y_m);
         let (code, off2) = self.lookup_grid(gx, gy);
