@@ -339,6 +339,7 @@ pub(crate) struct ParsedBlob<'a> {
     pub(crate) header: FieldHeader,
     pub(crate) encoding: u8,
     /// Header byte 33: encoding 2's clamp code (0: none); always 0 for encoding 1.
+    #[cfg(feature = "tiled-field")]
     pub(crate) clamp_code: u8,
     pub(crate) payload: &'a [u8],
     pub(crate) trailing: &'a [u8],
@@ -386,7 +387,10 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
     // Byte 33 is encoding 2's clamp code (checked against the pool by the tiled parser);
     // reserved, zero, for encoding 1.
     let clamp_code = byte(head, 33);
+    #[cfg(feature = "tiled-field")]
     let clamp_ok = clamp_code == 0 || encoding != ENCODING_U8_LINEAR;
+    #[cfg(not(feature = "tiled-field"))]
+    let clamp_ok = clamp_code == 0;
     if !clamp_ok || byte(head, 34) != 0 || byte(head, 35) != 0 {
         return Err(BlobError::ReservedNonZero);
     }
@@ -422,6 +426,7 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
     Ok(ParsedBlob {
         header,
         encoding,
+        #[cfg(feature = "tiled-field")]
         clamp_code,
         payload,
         trailing,

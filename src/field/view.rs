@@ -44,6 +44,7 @@ pub struct FieldView<'a> {
     /// Code steps per cell length: `cell_size / step`.
     steps_per_cell: f32,
     /// A tiled blob's clamp code (0: none).
+    #[cfg(feature = "tiled-field")]
     clamp_code: u8,
 }
 
@@ -69,13 +70,14 @@ impl<'a> FieldView<'a> {
     /// As [`FieldView::parse`], without [`BlobError::TrailingBytes`].
     pub fn parse_prefix(bytes: &'a [u8]) -> Result<(Self, &'a [u8]), BlobError> {
         let parsed = parse_blob(bytes)?;
-        let (header, encoding, clamp_code, payload, rest) = (
+        let (header, encoding, payload, rest) = (
             parsed.header,
             parsed.encoding,
-            parsed.clamp_code,
             parsed.payload,
             parsed.trailing,
         );
+        #[cfg(feature = "tiled-field")]
+        let clamp_code = parsed.clamp_code;
         #[cfg(feature = "tiled-field")]
         let cells = if encoding == ENCODING_TILED {
             Cells::Tiled(TiledCells::parse(&header, payload, clamp_code)?)
@@ -106,6 +108,7 @@ impl<'a> FieldView<'a> {
             inv_cell_size: 1.0 / header.cell_size_m,
             step_m,
             steps_per_cell: header.cell_size_m / step_m,
+            #[cfg(feature = "tiled-field")]
             clamp_code,
         };
         Ok((view, rest))
@@ -148,7 +151,12 @@ impl<'a> FieldView<'a> {
     /// up to `d_max` or beyond). `None` without a clamp (every distance below `d_max` exact to
     /// the code).
     pub fn clamp_code(&self) -> Option<u8> {
-        (self.clamp_code != 0).then_some(self.clamp_code)
+        #[cfg(feature = "tiled-field")]
+        let code = self.clamp_code;
+        // Only a tiled blob has a clamp.
+        #[cfg(not(feature = "tiled-field"))]
+        let code = 0;
+        (code != 0).then_some(code)
     }
 
     /// The clamp distance, metres (`clamp code · step`): distances at or beyond it are stored
