@@ -92,6 +92,15 @@ enum FieldCommand {
         #[arg(long = "clamp-m", value_name = "D")]
         clamp_m: Option<f32>,
     },
+    /// Score one scan of a log against each state of a map (doors open or closed) and say
+    /// which explains it.
+    ///
+    /// Builds one distance field per --variant map (one exact transform each), scores the
+    /// scan at the logged pose (or --pose) against each, prints the log-likelihoods and names
+    /// the variant that beats every other by more than --margin nats. The likelihood field
+    /// only looks at where beams end: a door changes the scores only if the scan's endpoints
+    /// land on or near it (docs/blob-format.md, map variants).
+    ScoreVariants(crate::field_variants::ScoreVariantsArgs),
     /// Describe a blob: grid, encoding, bytes and bytes per cell (and tiles for a tiled blob).
     Info {
         /// The blob.
@@ -150,6 +159,8 @@ pub enum FieldCmdError {
     /// A clamp (`--clamp-m`, or a clamped input blob) with the raw encoding, which cannot
     /// record it.
     ClampNeedsTiled,
+    /// `field score-variants` failed.
+    ScoreVariants(Box<crate::field_variants::ScoreVariantsError>),
 }
 
 impl std::fmt::Display for FieldCmdError {
@@ -170,6 +181,7 @@ impl std::fmt::Display for FieldCmdError {
                  d_max ({max} m)",
                 max / 510.0
             ),
+            Self::ScoreVariants(e) => write!(f, "score-variants: {e}"),
             Self::ClampNeedsTiled => f.write_str(
                 "a clamped field can only be stored tiled (--encoding tiled): the raw encoding \
                  cannot record the clamp",
@@ -709,6 +721,12 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                     bytes.len()
                 );
             }
+            Ok(())
+        }
+        FieldCommand::ScoreVariants(a) => {
+            let out = crate::field_variants::run_score_variants(&a, json)
+                .map_err(|e| FieldCmdError::ScoreVariants(Box::new(e)))?;
+            println!("{out}");
             Ok(())
         }
         FieldCommand::Info { blob } => {
