@@ -33,7 +33,7 @@ pub fn willow() -> Result {
             "--bin",
             "willow",
             "--features",
-            "tiled",
+            "tiled,fixed",
             "--message-format=json-render-diagnostics",
         ]);
     eprintln!("+ (cd firmware && {})", show(&cmd));
@@ -75,7 +75,7 @@ pub fn willow() -> Result {
     if code != 0 {
         return Err(format!("the willow program exited {code} under QEMU"));
     }
-    let mut host = [0.0f32; willow_plan::POSES];
+    let mut host = [willow_plan::Scores::default(); willow_plan::POSES];
     willow_plan::run(&blob, &mut host).map_err(|e| format!("host run: {e:?}"))?;
     let mut device = Vec::new();
     for line in out.lines() {
@@ -84,7 +84,16 @@ pub fn willow() -> Result {
                 .split_once(": ")
                 .ok_or_else(|| format!("bad line {line:?}"))?;
             let i: usize = i.parse().map_err(|e| format!("{line:?}: {e}"))?;
-            let bits = u32::from_str_radix(hex.trim(), 16).map_err(|e| format!("{line:?}: {e}"))?;
+            let words: Vec<&str> = hex.split_whitespace().collect();
+            let [p, q, x] = words[..] else {
+                return Err(format!("bad line {line:?}"));
+            };
+            let bad = |e: std::num::ParseIntError| format!("{line:?}: {e}");
+            let bits = willow_plan::Scores {
+                prepared: u32::from_str_radix(p, 16).map_err(bad)?,
+                per_pose: u32::from_str_radix(q, 16).map_err(bad)?,
+                fixed: u64::from_str_radix(x, 16).map_err(bad)? as i64,
+            };
             device.push((i, bits));
         }
     }
@@ -99,16 +108,12 @@ pub fn willow() -> Result {
         let h = host
             .get(i)
             .ok_or_else(|| format!("score index {i} out of range"))?;
-        if h.to_bits() != bits {
-            return Err(format!(
-                "pose {i}: device {} ({bits:08x}), host {h} ({:08x})",
-                f32::from_bits(bits),
-                h.to_bits()
-            ));
+        if *h != bits {
+            return Err(format!("pose {i}: device {bits:?}, host {h:?}"));
         }
     }
     println!(
-        "host reference: all {} scores equal the device's bit for bit",
+        "host reference: all {} poses' scores (prepared, per-pose and fixed-point paths) equal the device's bit for bit",
         willow_plan::POSES
     );
     Ok(())
