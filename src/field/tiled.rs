@@ -329,6 +329,48 @@ impl<'a> TiledCells<'a> {
     pub(crate) fn pool_tiles(&self) -> usize {
         (self.tables.len() - self.pool_at) / TILE_CELLS
     }
+
+    /// The per-beam loop's reader for a map of `height` cells: only the rows of tiles that
+    /// lie wholly on the map (`⌊H/4⌋` of them), so that one bounds check on the index stands
+    /// for the row test; cells of a last, partial row of tiles are left to the caller's slow
+    /// path ([`TiledCells::code`]).
+    pub(crate) fn full_rows(&self, height: u32) -> FullTileRows<'a> {
+        let full = (height / TILE_SIDE) as usize * self.tiles_w as usize * 2;
+        let (index, pool) = self.tables.split_at(self.pool_at.min(self.tables.len()));
+        FullTileRows {
+            index: index.get(..full).unwrap_or(&[]),
+            pool,
+            tiles_w: self.tiles_w,
+        }
+    }
+}
+
+/// The rows of tiles wholly on the map, for the fixed-point per-beam loop
+/// ([`TiledCells::full_rows`]).
+#[cfg(feature = "tiled-field")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FullTileRows<'a> {
+    /// Index entries of the full rows of tiles only (`2·TW·⌊H/4⌋` bytes).
+    index: &'a [u8],
+    /// The pool.
+    pool: &'a [u8],
+    /// `TW`.
+    tiles_w: u32,
+}
+
+#[cfg(feature = "tiled-field")]
+impl FullTileRows<'_> {
+    /// The code of cell `(ix, iy)` when `ix < W` (the caller's check) and `iy` is in a full row
+    /// of tiles; `None` for any other row (below the map, wrapped negative, in the partial
+    /// last row of tiles or above the map): rows past the index fall past its end.
+    #[inline(always)]
+    pub(crate) fn code(&self, ix: u32, iy: u32) -> Option<u8> {
+        let t = (iy >> 2) as usize * self.tiles_w as usize + (ix >> 2) as usize;
+        let pair: [u8; 2] = self.index.get(t * 2..t * 2 + 2)?.try_into().ok()?;
+        let local = ((iy & 3) << 2 | (ix & 3)) as usize;
+        let tile = usize::from(u16::from_le_bytes(pair)) * TILE_CELLS;
+        self.pool.get(tile | local).copied()
+    }
 }
 
 #[cfg(test)]
