@@ -38,10 +38,10 @@ pub use correlation::{
 pub use diagnostic::Lag1;
 pub use error::Error;
 pub use field::{
-    edt_scratch_len, emit_blob, emit_blob_from_squared_cells, emit_blob_tiled, squared_edt,
-    tiled_max_len, tiled_scratch_len, BlobError, EdtError, EdtScratch, FieldHeader, FieldView,
-    LikelihoodError, LikelihoodField, LikelihoodParam, LikelihoodParams, PreparedScan,
-    DEFAULT_MAX_DIST_M, EDT_INFINITY,
+    edt_scratch_len, emit_blob, emit_blob_from_squared_cells, emit_blob_tiled,
+    emit_blob_tiled_clamped, squared_edt, tiled_max_len, tiled_scratch_len, BlobError, EdtError,
+    EdtScratch, FieldHeader, FieldView, LikelihoodError, LikelihoodField, LikelihoodParam,
+    LikelihoodParams, PreparedScan, DEFAULT_MAX_DIST_M, EDT_INFINITY,
 };
 pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
 pub use landmark::{

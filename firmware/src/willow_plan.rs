@@ -3,11 +3,14 @@
 //! on the same blob, and compares every printed score bit for bit).
 //!
 //! The Willow map has no laser log, so the scan is made on the device: 180 beams cast through
-//! the blob from [`CENTRE`] (`RayCaster`), then scored by the likelihood field through a
-//! `PreparedScan` at a grid of poses around it.
+//! the blob from [`CENTRE`] (`RayCaster`), then scored by the likelihood field at a grid of
+//! poses around it three ways: through a `PreparedScan` (the fast path), through
+//! `LikelihoodField::score` (the per-pose path) and by the fixed-point scorer
+//! (`beamfield::fixed_point`, integer arithmetic only; the library's `fixed` feature).
 //!
 //! Only `core` and `beamfield`: it compiles for the Cortex-M and the host alike.
 
+use beamfield::fixed_point::{FixedField, FixedLayout, FixedPose, FixedScan};
 use beamfield::{
     BeamLayout, FieldView, LikelihoodField, LikelihoodParams, Pose, RayCaster, Scan, SensorMount,
 };
@@ -43,12 +46,23 @@ pub enum PlanError {
     Setup,
 }
 
-/// Casts the scan from [`CENTRE`] and scores it at every pose into `scores` (log-likelihoods);
-/// returns the blob's encoding and the number of beams kept.
+/// One pose's scores: prepared path, per-pose path (f32 bits) and fixed-point (`I48F16` bits).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Scores {
+    /// `PreparedScan::score`, f32 bits.
+    pub prepared: u32,
+    /// `LikelihoodField::score`, f32 bits.
+    pub per_pose: u32,
+    /// `FixedField::score`, the `I48F16` sum's bits.
+    pub fixed: i64,
+}
+
+/// Casts the scan from [`CENTRE`] and scores it at every pose into `scores`; returns the
+/// blob's encoding and the number of beams kept.
 ///
 /// # Errors
 /// [`PlanError`].
-pub fn run(blob: &[u8], scores: &mut [f32; POSES]) -> Result<(u8, usize), PlanError> {
+pub fn run(blob: &[u8], scores: &mut [Scores; POSES]) -> Result<(u8, usize), PlanError> {
     let view = FieldView::parse(blob).map_err(|_| PlanError::Blob)?;
     let caster = RayCaster::new(view).map_err(|_| PlanError::Setup)?;
     let layout = BeamLayout::<BEAMS>::uniform(
@@ -67,8 +81,20 @@ pub fn run(blob: &[u8], scores: &mut [f32; POSES]) -> Result<(u8, usize), PlanEr
     let params = LikelihoodParams::amcl_defaults(MAX_RANGE_M).map_err(|_| PlanError::Setup)?;
     let field = LikelihoodField::new(view, params);
     let prepared = field.prepare(&layout, &scan);
+    let fixed = FixedField::new(&field).map_err(|_| PlanError::Setup)?;
+    let fixed_layout = FixedLayout::new(&layout).map_err(|_| PlanError::Setup)?;
+    let fixed_scan = FixedScan::from_scan(&scan, &fixed);
     for (i, s) in scores.iter_mut().enumerate() {
-        *s = prepared.score(&pose(i)).log_likelihood;
+        let p = pose(i);
+        let fp = FixedPose::from_pose(&p).map_err(|_| PlanError::Setup)?;
+        *s = Scores {
+            prepared: prepared.score(&p).log_likelihood.to_bits(),
+            per_pose: field.score(&layout, &scan, &p).log_likelihood.to_bits(),
+            fixed: fixed
+                .score(&fixed_layout, &fixed_scan, &fp)
+                .log_likelihood
+                .to_bits(),
+        };
     }
     Ok((view.encoding(), prepared.len()))
 }

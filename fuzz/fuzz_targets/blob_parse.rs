@@ -7,7 +7,8 @@
 //! never reaches the size, cell-size and origin checks or lookups on unusual headers. The first
 //! input byte is therefore a set of repair flags, applied to the rest (the blob) before parsing:
 //! bit 0 writes a valid magic, version and header length; bit 1 a valid encoding (bit 5 set:
-//! encoding 2, tiled; clear: encoding 1, raw) and zero reserved bytes; bit 2 sets the
+//! encoding 2, tiled; clear: encoding 1, raw) and zero reserved bytes (bit 6 set with bit 5:
+//! header byte 33, encoding 2's clamp code, is left as the fuzzer wrote it); bit 2 sets the
 //! payload-length field to `W·H` (encoding 1's rule); bit 3 recomputes the payload CRC (over
 //! the stated payload length, as far as the bytes go); bit 4 recomputes the header CRC (last, over the
 //! repaired header). Each flag clear leaves that field as the fuzzer wrote it, so every check
@@ -18,7 +19,7 @@
 #![no_main]
 
 use beamfield::field::{
-    emit_blob, emit_blob_tiled, tiled_max_len, tiled_scratch_len, FieldView, LikelihoodField,
+    emit_blob, emit_blob_tiled_clamped, tiled_max_len, tiled_scratch_len, FieldView, LikelihoodField,
     LikelihoodParams, ENCODING_TILED,
 };
 use beamfield::{BeamLayout, Pose, Scan, SensorMount};
@@ -44,7 +45,8 @@ fn repair(flags: u8, blob: &mut [u8]) {
     if flags & 2 != 0 {
         // Bit 5 picks the encoding: 2 (tiled) when set, 1 (raw) when clear.
         blob[32] = if flags & 32 != 0 { ENCODING_TILED } else { 1 };
-        blob[33..36].fill(0);
+        let keep_clamp = flags & 32 != 0 && flags & 64 != 0;
+        blob[if keep_clamp { 34 } else { 33 }..36].fill(0);
     }
     let cells = u64::from(u32_at(blob, 8)) * u64::from(u32_at(blob, 12));
     if flags & 4 != 0 {
@@ -81,12 +83,17 @@ fn check(data: &[u8]) {
         assert_eq!(view.code(h.width, 0), None);
         assert_eq!(view.code(0, h.height), None);
         if view.encoding() == ENCODING_TILED {
-            // Re-emitted tiled, the codes come back (the input's pool order or padding may
-            // differ from the canonical writer's, so the bytes may not).
+            // Re-emitted tiled with the same clamp, the codes come back (the input's pool order
+            // or padding may differ from the canonical writer's, so the bytes may not). Every
+            // code is at most the clamp code (the parser checked the pool).
+            let clamp = view.clamp_code().unwrap_or(0);
+            assert!(clamp == 0 || codes.iter().all(|&c| c <= clamp));
             let mut scratch = vec![0u32; tiled_scratch_len(&h).expect("scratch")];
             let mut out = vec![0u8; tiled_max_len(&h).expect("len")];
-            let n = emit_blob_tiled(&h, &codes, &mut scratch, &mut out).expect("re-emit");
+            let n = emit_blob_tiled_clamped(&h, &codes, clamp, &mut scratch, &mut out)
+                .expect("re-emit");
             let again = FieldView::parse(&out[..n]).expect("re-parse");
+            assert_eq!(again.clamp_code(), view.clamp_code());
             for iy in 0..h.height {
                 for ix in 0..h.width {
                     assert_eq!(

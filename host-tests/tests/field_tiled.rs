@@ -15,7 +15,7 @@ use beamfield::fixed_point::{FixedField, FixedLayout, FixedPose, FixedScan};
 use beamfield::{BeamLayout, Pose, RayCaster, Scan, SensorMount};
 use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::demo_assets::SCAN_INDICES;
-use beamfield_tools::field_cmd::{build_blob, tile_blob};
+use beamfield_tools::field_cmd::{build_blob, tile_blob, tile_blob_clamped};
 use beamfield_tools::map::load_map;
 use demo_plan::{fine_search, COARSE, SIGMA_HIT_M, Z_HIT, Z_RAND};
 use proptest::prelude::*;
@@ -82,6 +82,51 @@ proptest! {
         prop_assert_eq!(every_code(&v), codes);
         // Re-tiling a tiled blob gives the same bytes (the output is canonical).
         prop_assert_eq!(tile_blob(&tiled).unwrap(), tiled);
+    }
+
+    /// Small maps of any width and height (so the last row and column of tiles are often
+    /// partial) scored from poses all over and around them: the prepared path on the tiled blob
+    /// (whose per-beam loop leaves the partial last row of tiles to its slow path) gives the
+    /// raw blob's scores bit for bit, and so does the per-pose path.
+    #[test]
+    fn tiled_scores_equal_raw_on_small_maps(
+        w in 1u32..24,
+        h in 1u32..24,
+        seed in any::<u64>(),
+        poses in proptest::collection::vec((-0.3f32..1.5, -0.3f32..1.5, -3.2f32..3.2), 1..8),
+    ) {
+        let header = FieldHeader::new(w, h, 0.05, 0.0, 0.0);
+        let mut s = seed | 1;
+        let codes: Vec<u8> = (0..w * h)
+            .map(|_| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                (s % 256) as u8
+            })
+            .collect();
+        let mut raw = vec![0u8; header.required_len().unwrap()];
+        emit_blob(&header, &codes, &mut raw).unwrap();
+        let tiled = tile_blob(&raw).unwrap();
+        let params = LikelihoodParams::new(0.95, 0.05, 0.05, 2.0).unwrap();
+        let fields: Vec<LikelihoodField<'_>> = [&raw[..], &tiled[..]]
+            .iter()
+            .map(|b| LikelihoodField::new(FieldView::parse(b).unwrap(), params))
+            .collect();
+        // 24 beams over the full circle, ranges 0.02 … 1.2 m: endpoints on and off every edge.
+        let layout = BeamLayout::<24>::uniform(-3.1, 0.26, 24, 2.0, SensorMount::CENTERED).unwrap();
+        let ranges: Vec<f32> = (0..24).map(|i| 0.02 + 0.05 * i as f32).collect();
+        let scan = Scan::<24>::from_ranges(&ranges).unwrap();
+        let prepared: Vec<_> = fields.iter().map(|f| f.prepare(&layout, &scan)).collect();
+        for &(x, y, t) in &poses {
+            let p = Pose::new(x * w as f32 * 0.05, y * h as f32 * 0.05, t);
+            let a = prepared[0].score(&p).log_likelihood;
+            let b = prepared[1].score(&p).log_likelihood;
+            prop_assert_eq!(a.to_bits(), b.to_bits(), "prepared at {:?}", p);
+            let a2 = fields[0].score(&layout, &scan, &p).log_likelihood;
+            let b2 = fields[1].score(&layout, &scan, &p).log_likelihood;
+            prop_assert_eq!(a2.to_bits(), b2.to_bits(), "per-pose at {:?}", p);
+        }
     }
 }
 
@@ -227,6 +272,11 @@ fn intel_demo_scores_bit_identical() {
     assert_eq!(compared, SCAN_INDICES.len() * COARSE.len());
 }
 
+/// [`small_tiled`] clamped at code 100 (byte 33 = 100; every pool code at most 100).
+fn small_clamped() -> Vec<u8> {
+    tile_blob_clamped(&small_tiled(), Some(100.0 * 2.0 / 255.0)).unwrap()
+}
+
 /// A small tiled blob with repeated tiles and a partial last row and column of tiles.
 fn small_tiled() -> Vec<u8> {
     let header = FieldHeader::new(10, 7, 0.05, -1.25, 3.5);
@@ -267,8 +317,14 @@ fn probe_all(v: &FieldView<'_>) -> u64 {
 
 #[test]
 fn every_truncation_is_an_error() {
-    let blob = small_tiled();
-    assert!(FieldView::parse(&blob).is_ok());
+    for blob in [small_tiled(), small_clamped()] {
+        truncations(&blob);
+    }
+    assert_eq!(small_clamped()[33], 100);
+}
+
+fn truncations(blob: &[u8]) {
+    assert!(FieldView::parse(blob).is_ok());
     for n in 0..blob.len() {
         assert_eq!(
             FieldView::parse(&blob[..n]).err(),
@@ -276,7 +332,7 @@ fn every_truncation_is_an_error() {
             "length {n}"
         );
     }
-    let mut longer = blob.clone();
+    let mut longer = blob.to_vec();
     longer.push(0);
     assert_eq!(
         FieldView::parse(&longer).err(),
@@ -286,11 +342,12 @@ fn every_truncation_is_an_error() {
 
 #[test]
 fn every_single_bit_flip_is_an_error() {
-    let blob = small_tiled();
-    for bit in 0..blob.len() * 8 {
-        let mut b = blob.clone();
-        b[bit / 8] ^= 1 << (bit % 8);
-        assert!(FieldView::parse(&b).is_err(), "flip of bit {bit} accepted");
+    for blob in [small_tiled(), small_clamped()] {
+        for bit in 0..blob.len() * 8 {
+            let mut b = blob.clone();
+            b[bit / 8] ^= 1 << (bit % 8);
+            assert!(FieldView::parse(&b).is_err(), "flip of bit {bit} accepted");
+        }
     }
 }
 
@@ -299,8 +356,23 @@ fn every_single_bit_flip_is_an_error() {
 /// is a valid, different field).
 #[test]
 fn every_resealed_bit_flip_is_typed_or_safe() {
-    let blob = small_tiled();
     let mut kinds = std::collections::BTreeMap::<String, usize>::new();
+    for blob in [small_tiled(), small_clamped()] {
+        resealed_flips(&blob, &mut kinds);
+    }
+    for k in [
+        "BadTileTable",
+        "TileIndexOutOfRange",
+        "PayloadLengthMismatch",
+        "BadClamp",
+        "accepted",
+    ] {
+        assert!(kinds.contains_key(k), "{k} never seen: {kinds:?}");
+    }
+    eprintln!("{kinds:?}");
+}
+
+fn resealed_flips(blob: &[u8], kinds: &mut std::collections::BTreeMap<String, usize>) {
     for bit in 0..(blob.len() - 48) * 8 + 40 * 8 {
         // Header bytes 0..40 and the payload; the CRC fields themselves are recomputed.
         let byte = if bit < 320 {
@@ -308,7 +380,7 @@ fn every_resealed_bit_flip_is_typed_or_safe() {
         } else {
             48 + (bit - 320) / 8
         };
-        let mut b = blob.clone();
+        let mut b = blob.to_vec();
         b[byte] ^= 1 << (bit % 8);
         reseal(&mut b);
         let r = std::panic::catch_unwind(|| match FieldView::parse(&b) {
@@ -321,13 +393,4 @@ fn every_resealed_bit_flip_is_typed_or_safe() {
         let k = r.unwrap_or_else(|_| panic!("panic on resealed flip of byte {byte} bit {bit}"));
         *kinds.entry(k).or_default() += 1;
     }
-    for k in [
-        "BadTileTable",
-        "TileIndexOutOfRange",
-        "PayloadLengthMismatch",
-        "accepted",
-    ] {
-        assert!(kinds.contains_key(k), "{k} never seen: {kinds:?}");
-    }
-    eprintln!("{kinds:?}");
 }

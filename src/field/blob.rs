@@ -115,6 +115,9 @@ pub enum BlobError {
     BadTileTable,
     /// Tiled blob: a tile-index entry names no tile of the pool.
     TileIndexOutOfRange,
+    /// Tiled blob: the clamp code (header byte 33) is 255, or a pool code is above it
+    /// (writer: a clamp code of 255).
+    BadClamp,
 }
 
 impl core::fmt::Display for BlobError {
@@ -126,6 +129,7 @@ impl core::fmt::Display for BlobError {
             Self::BadHeaderLength => f.write_str("bad header length"),
             Self::HeaderChecksum => f.write_str("header checksum mismatch"),
             Self::UnsupportedEncoding(e) => write!(f, "unsupported distance encoding {e}"),
+            Self::BadClamp => f.write_str("clamp code 255 or a tile code above the clamp code"),
             Self::ReservedNonZero => f.write_str("reserved header bytes not zero"),
             Self::ZeroSize => f.write_str("width or height is zero"),
             Self::TooLarge => f.write_str("grid too large"),
@@ -239,6 +243,7 @@ impl FieldHeader {
         &self,
         head: &mut [u8; BLOB_HEADER_LEN],
         encoding: u8,
+        clamp_code: u8,
         payload_len: u32,
         payload_crc: u32,
     ) {
@@ -256,7 +261,7 @@ impl FieldHeader {
         put(head, 20, &self.origin_x_m.to_le_bytes());
         put(head, 24, &self.origin_y_m.to_le_bytes());
         put(head, 28, &self.max_dist_m.to_le_bytes());
-        put(head, 32, &[encoding, 0, 0, 0]);
+        put(head, 32, &[encoding, clamp_code, 0, 0]);
         put(head, 36, &payload_len.to_le_bytes());
         put(head, 40, &payload_crc.to_le_bytes());
         let crc = CRC32.checksum(head.get(..44).unwrap_or(&[]));
@@ -312,7 +317,7 @@ fn emit_with(
     fill(payload);
     let payload_crc = CRC32.checksum(payload);
     let mut h = [0u8; BLOB_HEADER_LEN];
-    header.write_fields(&mut h, ENCODING_U8_LINEAR, payload_len, payload_crc);
+    header.write_fields(&mut h, ENCODING_U8_LINEAR, 0, payload_len, payload_crc);
     head.copy_from_slice(&h);
     Ok(total)
 }
@@ -321,6 +326,9 @@ fn emit_with(
 pub(crate) struct ParsedBlob<'a> {
     pub(crate) header: FieldHeader,
     pub(crate) encoding: u8,
+    /// Header byte 33: encoding 2's clamp code (0: none); always 0 for encoding 1.
+    #[cfg(feature = "tiled-field")]
+    pub(crate) clamp_code: u8,
     pub(crate) payload: &'a [u8],
     pub(crate) trailing: &'a [u8],
 }
@@ -358,10 +366,20 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
         return Err(BlobError::HeaderChecksum);
     }
     let encoding = byte(head, 32);
-    if encoding != ENCODING_U8_LINEAR && encoding != super::tiled::ENCODING_TILED {
+    // Encoding 2 is read only with the `tiled-field` feature (on by default).
+    let known = encoding == ENCODING_U8_LINEAR
+        || (cfg!(feature = "tiled-field") && encoding == super::tiled::ENCODING_TILED);
+    if !known {
         return Err(BlobError::UnsupportedEncoding(encoding));
     }
-    if byte(head, 33) != 0 || byte(head, 34) != 0 || byte(head, 35) != 0 {
+    // Byte 33 is encoding 2's clamp code (checked against the pool by the tiled parser);
+    // reserved, zero, for encoding 1.
+    let clamp_code = byte(head, 33);
+    #[cfg(feature = "tiled-field")]
+    let clamp_ok = clamp_code == 0 || encoding != ENCODING_U8_LINEAR;
+    #[cfg(not(feature = "tiled-field"))]
+    let clamp_ok = clamp_code == 0;
+    if !clamp_ok || byte(head, 34) != 0 || byte(head, 35) != 0 {
         return Err(BlobError::ReservedNonZero);
     }
     let header = FieldHeader {
@@ -374,11 +392,14 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
     };
     let cells = header.validate()?;
     let stated = usize::try_from(u32_at(36)).map_err(|_| BlobError::PayloadLengthMismatch)?;
+    #[cfg(feature = "tiled-field")]
     let possible = if encoding == ENCODING_U8_LINEAR {
         stated == cells
     } else {
         super::tiled::payload_len_possible(&header, stated)
     };
+    #[cfg(not(feature = "tiled-field"))]
+    let possible = stated == cells;
     if !possible {
         return Err(BlobError::PayloadLengthMismatch);
     }
@@ -393,6 +414,8 @@ pub(crate) fn parse_blob(bytes: &[u8]) -> Result<ParsedBlob<'_>, BlobError> {
     Ok(ParsedBlob {
         header,
         encoding,
+        #[cfg(feature = "tiled-field")]
+        clamp_code,
         payload,
         trailing,
     })
@@ -430,13 +453,15 @@ mod tests {
     fn each_field_check_is_reached() {
         let (_, good) = sample();
         type Edit = fn(&mut Vec<u8>);
-        let cases: [(Edit, BlobError); 14] = [
+        let cases: [(Edit, BlobError); 15] = [
             (|b| b[3] = b'X', BlobError::BadMagic),
             (|b| b[4] = 2, BlobError::UnsupportedVersion(2)),
             (|b| b[6] = 47, BlobError::BadHeaderLength),
             (|b| b[9] ^= 1, BlobError::HeaderChecksum),
             (|b| b[32] = 3, BlobError::UnsupportedEncoding(3)),
             (|b| b[34] = 1, BlobError::ReservedNonZero),
+            // Byte 33 is a clamp code for encoding 2 only: reserved for encoding 1.
+            (|b| b[33] = 1, BlobError::ReservedNonZero),
             (|b| b[8..12].fill(0), BlobError::ZeroSize),
             (
                 |b| b[8..12].copy_from_slice(&(1u32 << 25).to_le_bytes()),
@@ -509,5 +534,21 @@ mod tests {
             Err(BlobError::CellCountMismatch)
         );
         assert!(out.iter().all(|&b| b == 0));
+    }
+
+    /// Without the `tiled-field` feature a tiled blob is a typed error, not a misread.
+    #[cfg(not(feature = "tiled-field"))]
+    #[test]
+    fn tiled_blob_needs_the_feature() {
+        use super::super::tiled::{emit_blob_tiled, tiled_max_len, tiled_scratch_len};
+        let (h, _) = sample();
+        let codes = [0, 1, 2, 253, 254, 255];
+        let mut scratch = vec![0u32; tiled_scratch_len(&h).unwrap()];
+        let mut out = vec![0u8; tiled_max_len(&h).unwrap()];
+        let n = emit_blob_tiled(&h, &codes, &mut scratch, &mut out).unwrap();
+        assert_eq!(
+            super::super::FieldView::parse(&out[..n]).err(),
+            Some(BlobError::UnsupportedEncoding(2))
+        );
     }
 }

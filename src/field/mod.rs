@@ -40,7 +40,7 @@ pub use likelihood::{
 };
 pub use prepared::PreparedScan;
 pub use tiled::{
-    emit_blob_tiled, tiled_max_len, tiled_scratch_len, ENCODING_TILED, TILED_MAX_POOL_TILES,
-    TILE_SIDE,
+    emit_blob_tiled, emit_blob_tiled_clamped, tiled_max_len, tiled_scratch_len, ENCODING_TILED,
+    TILED_MAX_POOL_TILES, TILE_SIDE,
 };
 pub use view::FieldView;

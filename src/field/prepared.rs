@@ -40,7 +40,8 @@
 //! NaN) is scored by a per-beam `f32` path with the same result semantics.
 
 use super::likelihood::{LikelihoodField, LIKELIHOOD_TABLE_LEN};
-use super::tiled::TiledCells;
+#[cfg(feature = "tiled-field")]
+use super::tiled::FullTileRows;
 use super::view::Cells;
 use crate::math;
 use crate::model::Stride;
@@ -246,8 +247,10 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
         // One loop per encoding, chosen once per pose: no dispatch per beam.
         match self.field.view().cells() {
             Cells::Raw(codes) => self.fixed_path_over::<_, E, FIX16>(codes, ax, ay, c, s, f, each),
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(tiles) => {
-                self.fixed_path_over::<_, E, FIX16>(tiles, ax, ay, c, s, f, each)
+                let rows = tiles.full_rows(self.field.view().height());
+                self.fixed_path_over::<_, E, FIX16>(rows, ax, ay, c, s, f, each)
             }
         }
     }
@@ -373,11 +376,13 @@ impl CellRead for &[u8] {
     }
 }
 
-impl CellRead for TiledCells<'_> {
-    /// Encoding 2: both coordinates checked, then the tile index and the pool.
+#[cfg(feature = "tiled-field")]
+impl CellRead for FullTileRows<'_> {
+    /// Encoding 2: the column checked here, the row by the index's bounds check (rows of a
+    /// partial last row of tiles give `None` too: [`off_map`] reads them exactly).
     #[inline(always)]
-    fn read(&self, ix: u32, iy: u32, w: u32, h: u32) -> Option<u8> {
-        if (ix < w) & (iy < h) {
+    fn read(&self, ix: u32, iy: u32, w: u32, _h: u32) -> Option<u8> {
+        if ix < w {
             self.code(ix, iy)
         } else {
             None
@@ -498,6 +503,16 @@ fn on_map_run<'p, C: CellRead, E: FnMut(usize, f32), const FIX16: bool>(
 #[inline(never)]
 #[cold]
 fn off_map(field: &LikelihoodField<'_>, gx: i32, gy: i32, f: u32) -> (f32, u8) {
+    // A tiled blob's loop leaves the cells of a partial last row of tiles here: on the map,
+    // read at the same integer cell the raw loop reads.
+    #[cfg(feature = "tiled-field")]
+    if let Cells::Tiled(_) = field.view().cells() {
+        let (ix, iy) = (gx.wrapping_shr(f) as u32, gy.wrapping_shr(f) as u32);
+        if let Some(code) = field.view().code(ix, iy) {
+            let term = field.table().get(usize::from(code)).copied().unwrap_or(0.0);
+            return (term, code);
+        }
+    }
     let inv = pow2(-(f as i32));
     let code = field.view().table_index(gx as f32 * inv, gy as f32 * inv);
     let term = field.table().get(usize::from(code)).copied().unwrap_or(0.0);

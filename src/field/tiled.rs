@@ -120,6 +120,33 @@ pub fn emit_blob_tiled(
     scratch: &mut [u32],
     out: &mut [u8],
 ) -> Result<usize, BlobError> {
+    emit_blob_tiled_clamped(header, codes, 0, scratch, out)
+}
+
+/// As [`emit_blob_tiled`], with every code above `clamp_code` stored as `clamp_code` and the
+/// clamp code recorded in the header (byte 33), so that readers know that code means "at least
+/// this far" ([`FieldView::clamp_m`](super::FieldView::clamp_m)). `clamp_code` 0 writes no
+/// clamp (exactly [`emit_blob_tiled`]). Distances up to `clamp_code · step` keep their codes;
+/// far from walls the tiles become uniform and are stored once. The clamp code is
+/// [`FieldHeader::encode_distance_m`] of the clamp distance.
+///
+/// # Errors
+/// As [`emit_blob_tiled`]; [`BlobError::BadClamp`] for a clamp code of 255 (use 0: no clamp).
+pub fn emit_blob_tiled_clamped(
+    header: &FieldHeader,
+    codes: &[u8],
+    clamp_code: u8,
+    scratch: &mut [u32],
+    out: &mut [u8],
+) -> Result<usize, BlobError> {
+    if clamp_code == CODE_MAX {
+        return Err(BlobError::BadClamp);
+    }
+    let top = if clamp_code == 0 {
+        CODE_MAX
+    } else {
+        clamp_code
+    };
     let cells = header.validate()?;
     if codes.len() != cells {
         return Err(BlobError::CellCountMismatch);
@@ -131,7 +158,7 @@ pub fn emit_blob_tiled(
     let (table, ids) = scratch.split_at_mut(cap);
     table.fill(0);
     let (w, h) = (header.width, header.height);
-    let at = |t: usize| gather(codes, w, h, t as u32 % tw, t as u32 / tw);
+    let at = |t: usize| gather(codes, w, h, t as u32 % tw, t as u32 / tw).map(|c| c.min(top));
     // Pass 1: the pool tile of each map tile, pool tiles numbered by first appearance.
     let mut pool_tiles = 0u32;
     for t in 0..tiles {
@@ -185,7 +212,13 @@ pub fn emit_blob_tiled(
     }
     let payload_crc = super::blob::CRC32.checksum(payload);
     let mut hd = [0u8; BLOB_HEADER_LEN];
-    header.write_fields(&mut hd, ENCODING_TILED, payload_len32, payload_crc);
+    header.write_fields(
+        &mut hd,
+        ENCODING_TILED,
+        clamp_code,
+        payload_len32,
+        payload_crc,
+    );
     head.copy_from_slice(&hd);
     Ok(total)
 }
@@ -203,6 +236,7 @@ fn preamble(pool_tiles: u32) -> [u8; TILED_PREAMBLE_LEN] {
 
 /// Whether a payload length is possible for a tiled blob of `header`'s grid (checked before
 /// the payload is read, like encoding 1's `W·H` rule).
+#[cfg(feature = "tiled-field")]
 pub(crate) fn payload_len_possible(header: &FieldHeader, len: usize) -> bool {
     let Ok((_, _, tiles)) = tile_grid(header) else {
         return false;
@@ -218,6 +252,7 @@ pub(crate) fn payload_len_possible(header: &FieldHeader, len: usize) -> bool {
 
 /// A validated tiled payload: every index entry names a pool tile, so a lookup of a cell on
 /// the map never misses (the accessors still return `Option`: no panic path whatever).
+#[cfg(feature = "tiled-field")]
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TiledCells<'a> {
     /// The tile index (`2·TW·TH` bytes: u16 little-endian pool tile numbers) followed by the
@@ -229,14 +264,21 @@ pub(crate) struct TiledCells<'a> {
     tiles_w: u32,
 }
 
+#[cfg(feature = "tiled-field")]
 impl<'a> TiledCells<'a> {
-    /// Checks a tiled payload (its length and CRC already checked against the header).
+    /// Checks a tiled payload (its length and CRC already checked against the header) and
+    /// the header's clamp code (`0`: none).
     ///
     /// # Errors
     /// [`BlobError::BadTileTable`] (tile side not 4, reserved bytes not zero, pool size 0,
     /// above 65,536 or not the one the payload length implies), [`BlobError::TileIndexOutOfRange`]
-    /// (an index entry names no pool tile), [`BlobError::Truncated`].
-    pub(crate) fn parse(header: &FieldHeader, payload: &'a [u8]) -> Result<Self, BlobError> {
+    /// (an index entry names no pool tile), [`BlobError::BadClamp`] (clamp code 255, or a pool
+    /// code above a non-zero clamp code), [`BlobError::Truncated`].
+    pub(crate) fn parse(
+        header: &FieldHeader,
+        payload: &'a [u8],
+        clamp_code: u8,
+    ) -> Result<Self, BlobError> {
         let (tw, _, tiles) = tile_grid(header)?;
         let pre = payload
             .get(..TILED_PREAMBLE_LEN)
@@ -261,6 +303,10 @@ impl<'a> TiledCells<'a> {
         }) {
             return Err(BlobError::TileIndexOutOfRange);
         }
+        let pool = rest.get(tiles * 2..).unwrap_or(&[]);
+        if clamp_code == CODE_MAX || (clamp_code != 0 && pool.iter().any(|&c| c > clamp_code)) {
+            return Err(BlobError::BadClamp);
+        }
         Ok(Self {
             tables: rest,
             pool_at: tiles * 2,
@@ -283,9 +329,52 @@ impl<'a> TiledCells<'a> {
     pub(crate) fn pool_tiles(&self) -> usize {
         (self.tables.len() - self.pool_at) / TILE_CELLS
     }
+
+    /// The per-beam loop's reader for a map of `height` cells: only the rows of tiles that
+    /// lie wholly on the map (`⌊H/4⌋` of them), so that one bounds check on the index stands
+    /// for the row test; cells of a last, partial row of tiles are left to the caller's slow
+    /// path ([`TiledCells::code`]).
+    pub(crate) fn full_rows(&self, height: u32) -> FullTileRows<'a> {
+        let full = (height / TILE_SIDE) as usize * self.tiles_w as usize * 2;
+        let (index, pool) = self.tables.split_at(self.pool_at.min(self.tables.len()));
+        FullTileRows {
+            index: index.get(..full).unwrap_or(&[]),
+            pool,
+            tiles_w: self.tiles_w,
+        }
+    }
+}
+
+/// The rows of tiles wholly on the map, for the fixed-point per-beam loop
+/// ([`TiledCells::full_rows`]).
+#[cfg(feature = "tiled-field")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct FullTileRows<'a> {
+    /// Index entries of the full rows of tiles only (`2·TW·⌊H/4⌋` bytes).
+    index: &'a [u8],
+    /// The pool.
+    pool: &'a [u8],
+    /// `TW`.
+    tiles_w: u32,
+}
+
+#[cfg(feature = "tiled-field")]
+impl FullTileRows<'_> {
+    /// The code of cell `(ix, iy)` when `ix < W` (the caller's check) and `iy` is in a full row
+    /// of tiles; `None` for any other row (below the map, wrapped negative, in the partial
+    /// last row of tiles or above the map): rows past the index fall past its end.
+    #[inline(always)]
+    pub(crate) fn code(&self, ix: u32, iy: u32) -> Option<u8> {
+        let t = (iy >> 2) as usize * self.tiles_w as usize + (ix >> 2) as usize;
+        let pair: [u8; 2] = self.index.get(t * 2..t * 2 + 2)?.try_into().ok()?;
+        let local = ((iy & 3) << 2 | (ix & 3)) as usize;
+        let tile = usize::from(u16::from_le_bytes(pair)) * TILE_CELLS;
+        self.pool.get(tile | local).copied()
+    }
 }
 
 #[cfg(test)]
+#[cfg(feature = "tiled-field")]
 mod tests {
     use super::super::blob::{parse_blob, CRC32};
     use super::super::view::FieldView;
@@ -341,6 +430,46 @@ mod tests {
         let mut want = vec![4, 0, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0];
         want.extend([255; 16]);
         assert_eq!(&b[48..], &want[..]);
+    }
+
+    /// The 5 × 3 map of `hand_laid_out_payload` clamped at code 10: codes above 10 become 10,
+    /// byte 33 records it, and the view reports it.
+    #[test]
+    fn clamped_payload_by_hand() {
+        let h = FieldHeader::new(5, 3, 0.05, 0.0, 0.0);
+        let codes: Vec<u8> = (1..=15).collect();
+        let mut scratch = vec![0u32; tiled_scratch_len(&h).unwrap()];
+        let mut b = vec![0u8; tiled_max_len(&h).unwrap()];
+        let n = emit_blob_tiled_clamped(&h, &codes, 10, &mut scratch, &mut b).unwrap();
+        b.truncate(n);
+        let mut want = vec![4, 0, 0, 0, 2, 0, 0, 0, 0, 0, 1, 0];
+        want.extend([1, 2, 3, 4, 6, 7, 8, 9, 10, 10, 10, 10, 10, 10, 10, 10]);
+        want.extend([5, 5, 5, 5, 10, 10, 10, 10, 10, 10, 10, 10, 10, 10, 10, 10]);
+        assert_eq!(&b[48..], &want[..]);
+        assert_eq!(b[33], 10);
+        let v = FieldView::parse(&b).unwrap();
+        assert_eq!(v.clamp_code(), Some(10));
+        assert_eq!(v.clamp_m(), Some(10.0 * (2.0f32 / 255.0)));
+        assert_eq!(v.code(4, 2), Some(10));
+        assert_eq!(v.code(3, 0), Some(4));
+        // No clamp: byte 33 zero, no clamp reported.
+        assert_eq!(
+            FieldView::parse(&tiled(&h, &codes)).unwrap().clamp_code(),
+            None
+        );
+        // A pool code above the clamp, and a clamp code of 255, are typed errors.
+        let mut above = b.clone();
+        above[60] = 11;
+        reseal(&mut above);
+        assert_eq!(FieldView::parse(&above).err(), Some(BlobError::BadClamp));
+        let mut top = b.clone();
+        top[33] = 255;
+        reseal(&mut top);
+        assert_eq!(FieldView::parse(&top).err(), Some(BlobError::BadClamp));
+        assert_eq!(
+            emit_blob_tiled_clamped(&h, &codes, 255, &mut scratch, &mut b),
+            Err(BlobError::BadClamp)
+        );
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! [`FieldView`]: a validated, zero-copy view of a distance-field blob (in flash or anywhere).
 
 use super::blob::{parse_blob, BlobError, FieldHeader, CODE_MAX, ENCODING_U8_LINEAR};
+#[cfg(feature = "tiled-field")]
 use super::tiled::{TiledCells, ENCODING_TILED};
 
 /// Where a view's codes live: one byte per cell (encoding 1) or deduplicated tiles
@@ -9,7 +10,8 @@ use super::tiled::{TiledCells, ENCODING_TILED};
 pub(crate) enum Cells<'a> {
     /// Encoding 1: `width · height` codes, row-major.
     Raw(&'a [u8]),
-    /// Encoding 2: a tile index and a tile pool.
+    /// Encoding 2: a tile index and a tile pool (feature `tiled-field`).
+    #[cfg(feature = "tiled-field")]
     Tiled(TiledCells<'a>),
 }
 
@@ -41,6 +43,9 @@ pub struct FieldView<'a> {
     step_m: f32,
     /// Code steps per cell length: `cell_size / step`.
     steps_per_cell: f32,
+    /// A tiled blob's clamp code (0: none).
+    #[cfg(feature = "tiled-field")]
+    clamp_code: u8,
 }
 
 impl<'a> FieldView<'a> {
@@ -71,9 +76,18 @@ impl<'a> FieldView<'a> {
             parsed.payload,
             parsed.trailing,
         );
+        #[cfg(feature = "tiled-field")]
+        let clamp_code = parsed.clamp_code;
+        #[cfg(feature = "tiled-field")]
         let cells = if encoding == ENCODING_TILED {
-            Cells::Tiled(TiledCells::parse(&header, payload)?)
+            Cells::Tiled(TiledCells::parse(&header, payload, clamp_code)?)
         } else {
+            Cells::Raw(payload)
+        };
+        // Without the feature `parse_blob` accepts encoding 1 only.
+        #[cfg(not(feature = "tiled-field"))]
+        let cells = {
+            let _ = encoding;
             Cells::Raw(payload)
         };
         let stride = usize::try_from(header.width).map_err(|_| BlobError::TooLarge)?;
@@ -83,6 +97,7 @@ impl<'a> FieldView<'a> {
             cells,
             raw: match cells {
                 Cells::Raw(c) => c,
+                #[cfg(feature = "tiled-field")]
                 Cells::Tiled(_) => &[],
             },
             width_f: header.width as f32,
@@ -93,6 +108,8 @@ impl<'a> FieldView<'a> {
             inv_cell_size: 1.0 / header.cell_size_m,
             step_m,
             steps_per_cell: header.cell_size_m / step_m,
+            #[cfg(feature = "tiled-field")]
+            clamp_code,
         };
         Ok((view, rest))
     }
@@ -128,6 +145,27 @@ impl<'a> FieldView<'a> {
         self.step_m
     }
 
+    /// The clamp code of a tiled blob built with a clamp distance (`beamfield field build
+    /// --clamp-m`): codes never exceed it, and a cell whose code equals it is **at least**
+    /// [`FieldView::clamp_m`] from the nearest occupied cell (its true distance may be anything
+    /// up to `d_max` or beyond). `None` without a clamp (every distance below `d_max` exact to
+    /// the code).
+    pub fn clamp_code(&self) -> Option<u8> {
+        #[cfg(feature = "tiled-field")]
+        let code = self.clamp_code;
+        // Only a tiled blob has a clamp.
+        #[cfg(not(feature = "tiled-field"))]
+        let code = 0;
+        (code != 0).then_some(code)
+    }
+
+    /// The clamp distance, metres (`clamp code · step`): distances at or beyond it are stored
+    /// as it, so [`FieldView::distance_m`] reads `≥ clamp_m` as `clamp_m`. `None` without a
+    /// clamp.
+    pub fn clamp_m(&self) -> Option<f32> {
+        self.clamp_code().map(|c| f32::from(c) * self.step_m)
+    }
+
     /// The payload of an encoding-1 blob: one code per cell, row-major, row 0 = lowest y.
     /// **Empty for a tiled blob** (encoding 2), which stores no such array: read cells with
     /// [`FieldView::code`] (either encoding) or use [`FieldView::raw_codes`].
@@ -139,15 +177,18 @@ impl<'a> FieldView<'a> {
     pub fn raw_codes(&self) -> Option<&'a [u8]> {
         match self.cells {
             Cells::Raw(c) => Some(c),
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(_) => None,
         }
     }
 
     /// The blob's distance encoding: [`ENCODING_U8_LINEAR`] (1) or
-    /// [`ENCODING_TILED`] (2). Both give the same codes.
+    /// [`tiled::ENCODING_TILED`](super::tiled::ENCODING_TILED) (2, read only with the `tiled-field`
+    /// feature). Both give the same codes.
     pub fn encoding(&self) -> u8 {
         match self.cells {
             Cells::Raw(_) => ENCODING_U8_LINEAR,
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(_) => ENCODING_TILED,
         }
     }
@@ -156,6 +197,7 @@ impl<'a> FieldView<'a> {
     pub fn pool_tiles(&self) -> Option<usize> {
         match self.cells {
             Cells::Raw(_) => None,
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(t) => Some(t.pool_tiles()),
         }
     }
@@ -196,8 +238,11 @@ impl<'a> FieldView<'a> {
     #[inline(never)]
     #[cold]
     fn code_slow(&self, ix: u32, iy: u32) -> Option<u8> {
+        #[cfg(not(feature = "tiled-field"))]
+        let _ = (ix, iy);
         match self.cells {
             Cells::Raw(_) => None,
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(t) => t.code(ix, iy),
         }
     }
@@ -208,6 +253,7 @@ impl<'a> FieldView<'a> {
     pub(crate) fn code_at_index(&self, i: usize) -> Option<u8> {
         match self.cells {
             Cells::Raw(codes) => codes.get(i).copied(),
+            #[cfg(feature = "tiled-field")]
             Cells::Tiled(t) => {
                 // Out-of-bounds `i` of a raw blob never reaches here (see the raw arm).
                 let iy = i.checked_div(self.stride)?;
@@ -280,7 +326,8 @@ impl<'a> FieldView<'a> {
     /// the cell's code times [`FieldView::step_m`], plus the exact Euclidean distance from the
     /// point to the map's rectangle when it lies off the map.
     ///
-    /// Inside the map the result is at most `d_max`; NaN input gives NaN.
+    /// Inside the map the result is at most `d_max`, or at most [`FieldView::clamp_m`] for a
+    /// blob with a clamp, where that value means "this far or farther"; NaN input gives NaN.
     pub fn distance_m(&self, x_m: f32, y_m: f32) -> f32 {
         let (gx, gy) = self.to_grid(x_m, y_m);
         let (code, off2) = self.lookup_grid(gx, gy);

@@ -15,6 +15,7 @@ pub mod track;
 
 pub mod field_cmd;
 pub mod field_figure;
+pub mod field_variants;
 pub mod map;
 
 pub mod carmen;

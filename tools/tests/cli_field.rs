@@ -182,3 +182,120 @@ fn variant_of_another_geometry_is_refused() {
         "{err}"
     );
 }
+
+/// `--clamp-m` (clamped tiled blobs): recorded in the blob (code round(0.5·255/2) = 64, so
+/// 64·2/255 m), smaller than the lossless tiled blob, sized as the format says for its pool;
+/// `field encode --clamp-m` of the raw blob gives the same bytes; a raw clamped blob is refused
+/// both ways; and `field score-variants` on two copies of one map names no variant.
+#[test]
+fn clamped_build_encode_and_score_variants() {
+    let out = std::env::temp_dir().join(format!("beamfield-cli-clamp-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let map = data_dir().join("map_turtlebot3_world/map.yaml");
+    let (raw, tiled, clamped, encoded) = (
+        out.join("raw.bin"),
+        out.join("tiled.bin"),
+        out.join("clamped.bin"),
+        out.join("encoded.bin"),
+    );
+    for (path, extra) in [
+        (&raw, &["--encoding", "raw"][..]),
+        (&tiled, &["--encoding", "tiled"][..]),
+        (&clamped, &["--encoding", "tiled", "--clamp-m", "0.5"][..]),
+    ] {
+        run_json(
+            bin()
+                .args(["--json", "field", "build"])
+                .args(extra)
+                .arg(&map)
+                .arg("-o")
+                .arg(path),
+        );
+    }
+    let info = run_json(bin().args(["--json", "field", "info"]).arg(&clamped));
+    let want = 64.0 * 2.0 / 255.0;
+    assert!(
+        (info["clamp_m"].as_f64().unwrap() - want).abs() < 1e-6,
+        "{info}"
+    );
+    let pool = info["pool_tiles"].as_u64().unwrap();
+    assert_eq!(
+        info["bytes"].as_u64().unwrap(),
+        48 + 8 + 2 * 96 * 96 + 16 * pool
+    );
+    let lossless = run_json(bin().args(["--json", "field", "info"]).arg(&tiled));
+    assert!(lossless["clamp_m"].is_null());
+    assert!(info["bytes"].as_u64() < lossless["bytes"].as_u64());
+    run_json(
+        bin()
+            .args([
+                "--json",
+                "field",
+                "encode",
+                "--encoding",
+                "tiled",
+                "--clamp-m",
+                "0.5",
+            ])
+            .arg(&raw)
+            .arg("-o")
+            .arg(&encoded),
+    );
+    assert_eq!(
+        std::fs::read(&encoded).unwrap(),
+        std::fs::read(&clamped).unwrap()
+    );
+    let refused = [
+        bin()
+            .args(["field", "build", "--clamp-m", "0.5"])
+            .arg(&map)
+            .arg("-o")
+            .arg(out.join("x.bin"))
+            .output()
+            .unwrap(),
+        bin()
+            .args(["field", "encode", "--encoding", "raw"])
+            .arg(&clamped)
+            .arg("-o")
+            .arg(out.join("y.bin"))
+            .output()
+            .unwrap(),
+    ];
+    for st in refused {
+        assert!(!st.status.success());
+        let err = String::from_utf8(st.stderr).unwrap();
+        assert!(err.contains("can only be stored tiled"), "{err}");
+    }
+
+    let log = data_dir().join("laser_intel_lab/intel-corrected.log");
+    let intel = out.join("intel.yaml");
+    let st = bin()
+        .args(["map", "from-log"])
+        .arg(&log)
+        .arg("-o")
+        .arg(&intel)
+        .args(["--resolution", "0.05"])
+        .output()
+        .unwrap();
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
+    let r = run_json(
+        bin()
+            .args(["--json", "field", "score-variants", "--variant"])
+            .arg(&intel)
+            .arg("--variant")
+            .arg(&intel)
+            .arg("--log")
+            .arg(&log)
+            .args(["--scan", "50", "--sigma-hit", "0.0588"]),
+    );
+    let v = r["variants"].as_array().unwrap();
+    assert_eq!(v.len(), 2);
+    assert_eq!(v[0]["log_likelihood_nats"], v[1]["log_likelihood_nats"]);
+    assert!(r["preferred"].is_null(), "{r}");
+    assert_eq!(r["lead_nats"], 0.0);
+    std::fs::remove_dir_all(&out).ok();
+}

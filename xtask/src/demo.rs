@@ -43,8 +43,17 @@ impl Board {
 /// code, stdout and stderr. The SysTick clock of the board reaches the build as
 /// `BEAMFIELD_CORE_HZ`.
 pub fn build_and_run(board: Board, bin: &str) -> Result<(i32, String, String)> {
+    build_and_run_with(board, bin, &[])
+}
+
+/// [`build_and_run`] with firmware cargo `features` turned on.
+pub fn build_and_run_with(
+    board: Board,
+    bin: &str,
+    features: &[&str],
+) -> Result<(i32, String, String)> {
     ensure_qemu()?;
-    let elf = build(board, bin)?;
+    let elf = build_with(board, bin, features)?;
     run_to_files(
         Command::new("timeout")
             .args([
@@ -66,6 +75,11 @@ pub fn build_and_run(board: Board, bin: &str) -> Result<(i32, String, String)> {
 
 /// Builds firmware program `bin` (release) for `board`; returns the ELF's path.
 pub fn build(board: Board, bin: &str) -> Result<PathBuf> {
+    build_with(board, bin, &[])
+}
+
+/// [`build`] with firmware cargo `features` turned on.
+pub fn build_with(board: Board, bin: &str, features: &[&str]) -> Result<PathBuf> {
     ensure_target(FIRMWARE_TARGET)?;
     let mut cmd = cargo();
     cmd.current_dir(repo_root().join("firmware"))
@@ -80,6 +94,9 @@ pub fn build(board: Board, bin: &str) -> Result<PathBuf> {
             bin,
             "--message-format=json-render-diagnostics",
         ]);
+    if !features.is_empty() {
+        cmd.args(["--features", &features.join(",")]);
+    }
     eprintln!("+ (cd firmware && {})", show(&cmd));
     let out = capture(&mut cmd)?;
     let elf = out

@@ -518,7 +518,8 @@ fn insns(machine: &str) -> Result {
             .to_string());
     }
     let tools = insncount_dir()?;
-    let elves = build_firmware(true, None)?;
+    // Regions 10-11 read a tiled blob: one build with the tiled reader measures both encodings.
+    let elves = build_firmware(true, Some("tiled"))?;
     let elf = elves
         .get("insns")
         .ok_or("the firmware has no `insns` program")?;

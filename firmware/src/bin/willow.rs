@@ -1,7 +1,8 @@
 //! A map that does not fit the STM32F405 raw: the Willow Garage distance field (1165 × 945
 //! cells of 5 cm; 1,100,973 bytes raw, more than the chip's 1 MiB of flash) linked tiled
 //! (distance encoding 2, 523,920 bytes), parsed at boot, a scan cast through it and scored at
-//! 125 poses ([`willow_plan`]). Prints every score's f32 bits; `cargo xtask willow` links it with
+//! 125 poses ([`willow_plan`]) through the prepared, the per-pose and the fixed-point paths.
+//! Prints every score's bits; `cargo xtask willow` links it with
 //! the STM32F405 layout (`memory-stm32f405.x`), runs it on QEMU's `netduinoplus2` and compares
 //! every score with the host's, bit for bit.
 //!
@@ -15,14 +16,14 @@ use panic_semihosting as _;
 
 #[path = "../willow_plan.rs"]
 mod willow_plan;
-use willow_plan::{run, POSES};
+use willow_plan::{run, Scores, POSES};
 
 /// The Willow Garage field, tiled (`beamfield field build … --encoding tiled`).
 static BLOB: &[u8] = include_bytes!("../../assets/willow-tiled.bin");
 
 #[entry]
 fn main() -> ! {
-    let mut scores = [0.0f32; POSES];
+    let mut scores = [Scores::default(); POSES];
     match run(BLOB, &mut scores) {
         Ok((encoding, kept)) => {
             println!(
@@ -34,8 +35,11 @@ fn main() -> ! {
             );
             let mut best = 0usize;
             for (i, s) in scores.iter().enumerate() {
-                println!("score {}: {:08x}", i, s.to_bits());
-                if *s > scores[best] {
+                println!(
+                    "score {}: {:08x} {:08x} {:016x}",
+                    i, s.prepared, s.per_pose, s.fixed
+                );
+                if f32::from_bits(s.prepared) > f32::from_bits(scores[best].prepared) {
                     best = i;
                 }
             }
