@@ -110,6 +110,10 @@ enum Task {
         /// Board (QEMU machine and memory layout).
         #[arg(long, value_enum, default_value = "mps2-an386")]
         board: demo::Board,
+        /// How the Intel field is linked: raw (one byte per cell) or tiled (the same codes in
+        /// deduplicated 4 × 4 tiles, checked against the host's run on the raw field).
+        #[arg(long, value_enum, default_value = "raw")]
+        encoding: demo::DemoEncoding,
     },
     /// The Willow Garage map (1.10 MB raw, more than an STM32F405's flash) linked tiled with the
     /// STM32F405 layout, run on QEMU's netduinoplus2: a scan cast through it and scored at 125
@@ -208,7 +212,7 @@ fn main() -> ExitCode {
         } => qemu(&bin, &machine, !debug),
         Task::Insns { machine } => insns(&machine),
         Task::Cross => cross(),
-        Task::Demo { board } => demo::demo(board),
+        Task::Demo { board, encoding } => demo::demo(board, encoding),
         Task::Willow => willow::willow(),
         Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => budgets::nopanic(show_failure),

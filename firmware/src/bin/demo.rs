@@ -61,8 +61,14 @@ use demo_plan::{
     Z_RAND,
 };
 
-/// The 5 cm distance field of the Intel map (see `docs/demo.md`).
+/// The 5 cm distance field of the Intel map (see `docs/demo.md`), one byte per cell.
+#[cfg(not(feature = "tiled"))]
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
+/// The 5 cm distance field of the Intel map (see `docs/demo.md`): the same codes in
+/// deduplicated 4 × 4 tiles (distance encoding 2, docs/blob-format.md), linked when the firmware
+/// is built with its feature `tiled` (`cargo xtask demo --encoding tiled`).
+#[cfg(feature = "tiled")]
+static BLOB: &[u8] = include_bytes!("../../assets/intel-tiled.bin");
 
 /// The SysTick (core) clock, Hz: 25 MHz on mps2-an386 (the default); `cargo xtask demo --board
 /// netduinoplus2` sets `BEAMFIELD_CORE_HZ` to QEMU's STM32F405 clock. Under `-icount shift=0`
