@@ -21,6 +21,7 @@ pub mod config;
 pub mod estimate;
 pub mod filter;
 pub mod motion;
+pub mod normal;
 pub mod resample;
 pub mod rng;
 

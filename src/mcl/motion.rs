@@ -25,7 +25,7 @@
 //! `|δrot − π|` (both wrapped), so a robot reversing 1 m does not get the noise of a half turn
 //! (AMCL does the same). Units: metres and radians throughout.
 
-use crate::gaussian::standard_normal_pair;
+use super::normal::{standard_normal, standard_normal_from};
 use crate::math;
 use crate::pose::{wrap_angle, Pose};
 use core::f32::consts::PI;
@@ -110,9 +110,10 @@ impl OdometryNoise {
     /// Draws the robot's new pose from `p(x' | step, x)` (Thrun Table 5.6).
     ///
     /// # Random numbers
-    /// Exactly four `next_u32`: two [`standard_normal_pair`]s, giving the noise of δrot1 and
-    /// δtrans (first pair) and of δrot2 (first value of the second pair; the second value is
-    /// discarded). The returned heading is wrapped into `[−π, π)`.
+    /// Three standard normals by the ziggurat ([`super::normal`]): the noise of δrot1 and
+    /// δtrans from the low and high halves of one `next_u64`, that of δrot2 from one
+    /// `next_u32`; about one draw in 28 needs further words (a ziggurat's slow path). The
+    /// returned heading is wrapped into `[−π, π)`.
     pub fn sample<R: Rng + ?Sized>(&self, pose: &Pose, step: &OdometryStep, rng: &mut R) -> Pose {
         sample_with(pose, step, self.sigmas(step), rng)
     }
@@ -127,8 +128,10 @@ pub fn sample_with<R: Rng + ?Sized>(
     (s_rot1, s_trans, s_rot2): (f32, f32, f32),
     rng: &mut R,
 ) -> Pose {
-    let (n1, n2) = standard_normal_pair(rng);
-    let (n3, _) = standard_normal_pair(rng);
+    let pair = rng.next_u64();
+    let n1 = standard_normal_from(pair as u32, rng);
+    let n2 = standard_normal_from((pair >> 32) as u32, rng);
+    let n3 = standard_normal(rng);
     let rot1 = step.rot1_rad - s_rot1 * n1;
     let trans = step.trans_m - s_trans * n2;
     let rot2 = step.rot2_rad - s_rot2 * n3;

@@ -4,7 +4,8 @@
 //! The shared logs carry corrected poses and no raw odometry, so odometry is synthesized:
 //! starting at the first logged pose, each step between consecutive logged poses (Thrun's
 //! `(δrot1, δtrans, δrot2)`) is perturbed by the filter's own motion model
-//! ([`OdometryNoise::sample`], AMCL's `odom_alpha1..4` variance convention) and chained. The
+//! (the variances of [`beamfield::mcl::OdometryNoise::sigmas`], AMCL's `odom_alpha1..4` convention, drawn with
+//! Box–Muller normals by `odometry_sample`, not the filter's ziggurat) and chained. The
 //! filter sees only these odometry poses and the scans; the logged poses are the truth it is
 //! scored against.
 //!

@@ -3,10 +3,11 @@
 use crate::carmen::{CarmenLog, ReadOptions};
 use crate::score_cmd::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
+use beamfield::gaussian::standard_normal_pair;
 use beamfield::mcl::{
     Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64,
 };
-use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, SensorMount, Tempered};
+use beamfield::{math, wrap_angle, BeamLayout, Pose, Reading, Scan, SensorMount, Tempered};
 use std::io::IsTerminal;
 use std::path::Path;
 
@@ -223,8 +224,9 @@ fn amcl_cube(
 }
 
 /// The synthesized odometry of run seed `seed`: starting at the first logged pose, each step
-/// between consecutive logged poses is perturbed by `noise` ([`OdometryNoise::sample`], drawing
-/// from [`SplitMix64`] seeded `seed ^ ODOMETRY_SEED_XOR`) and chained. One pose per logged pose
+/// between consecutive logged poses is perturbed by `noise` (the variances of
+/// [`OdometryNoise::sigmas`], drawn by [`odometry_sample`] from [`SplitMix64`] seeded
+/// `seed ^ ODOMETRY_SEED_XOR`) and chained. One pose per logged pose
 /// (none for none). The filter sees the steps between consecutive odometry poses; the firmware's
 /// track asset (`firmware/assets/track.rs`) is written from the same function.
 ///
@@ -242,13 +244,40 @@ pub fn synthesize_odometry(
             (Some(prev), Some(odom)) => {
                 let step = OdometryStep::between(prev, truth)
                     .map_err(|e| usage(format!("logged pose {k}: {e}")))?;
-                noise.sample(odom, &step, &mut odom_rng)
+                odometry_sample(noise, odom, &step, &mut odom_rng)
             }
             _ => *truth,
         };
         out.push(next);
     }
     Ok(out)
+}
+
+/// One draw of the odometry model for the synthesized odometry: the model of
+/// [`OdometryNoise::sample`], with its normals from the Box–Muller transform
+/// ([`standard_normal_pair`], four `next_u32`: δrot1 and δtrans from the first pair, δrot2 from
+/// the first value of the second) rather than the filter's ziggurat, so that the data the
+/// filter is measured on does not come from the filter's own sampler. (The filter used
+/// Box–Muller until it moved to the ziggurat for speed; this keeps the synthesized odometry,
+/// and the firmware's track asset, as they were.)
+pub fn odometry_sample(
+    noise: &OdometryNoise,
+    pose: &Pose,
+    step: &OdometryStep,
+    rng: &mut SplitMix64,
+) -> Pose {
+    let (s_rot1, s_trans, s_rot2) = noise.sigmas(step);
+    let (n1, n2) = standard_normal_pair(rng);
+    let (n3, _) = standard_normal_pair(rng);
+    let rot1 = step.rot1_rad() - s_rot1 * n1;
+    let trans = step.trans_m() - s_trans * n2;
+    let rot2 = step.rot2_rad() - s_rot2 * n3;
+    let (s, c) = math::sin_cos(pose.theta_rad + rot1);
+    Pose {
+        x_m: pose.x_m + trans * c,
+        y_m: pose.y_m + trans * s,
+        theta_rad: wrap_angle(pose.theta_rad + rot1 + rot2),
+    }
 }
 
 /// Runs the filter over the log once.
