@@ -1,6 +1,7 @@
 //! The pose estimate of a weighted particle set: weighted mean, circular mean heading,
 //! covariance, and the effective sample size.
 
+use super::fast::wrap_once;
 use crate::math;
 use crate::pose::{wrap_angle, Pose};
 
@@ -35,8 +36,9 @@ impl Estimate {
     ///
     /// One pass, on the deviations `(dx, dy, dθ)` of each particle from `center` (`dθ`
     /// wrapped): the mean is `center` plus their weighted mean, the heading `center.θ + atan2(Σ
-    /// w sin dθ, Σ w cos dθ)` (the circular mean; for `|dθ| ≤ 1` the sine and cosine are their
-    /// Taylor polynomials to degree 9 and 10, exact to f32 rounding), and the covariance comes
+    /// w sin dθ, Σ w cos dθ)` (the circular mean; for `|dθ| ≤ 0.5` the sine and cosine are
+    /// their Taylor polynomials to degree 5 and 6, within 1.6e-6 of them, so the heading is
+    /// within 1.6e-6 rad of the exact circular mean), and the covariance comes
     /// from the deviations' second moments (`E[d dᵀ] − E[d] E[d]ᵀ`, with the heading deviations
     /// taken from the circular mean). The deviations are at most `radius_m` and
     /// `half_angle_rad`, so the second moments lose no precision to cancellation at the filter's
@@ -48,22 +50,13 @@ impl Estimate {
         radius_m: f32,
         half_angle_rad: f32,
     ) -> Self {
-        let r2 = radius_m * radius_m;
         let mut all = 0.0f32;
-        let mut m = Moments::default();
+        let mut m = Moments::new(center, radius_m, half_angle_rad);
         for (p, &w) in poses.iter().zip(weights) {
             all += w * w;
-            let (dx, dy) = (p.x_m - center.x_m, p.y_m - center.y_m);
-            let dt = angle_difference(p.theta_rad, center.theta_rad);
-            if dx * dx + dy * dy <= r2 && dt.abs() <= half_angle_rad {
-                m.add(w, dx, dy, dt);
-            }
+            m.add_if_near(p, w);
         }
-        let mut e = if m.w > 0.0 {
-            m.estimate(center)
-        } else {
-            Self::of(poses, weights)
-        };
+        let mut e = m.estimate().unwrap_or_else(|| Self::of(poses, weights));
         e.ess = if all > 0.0 { 1.0 / all } else { 0.0 };
         e
     }
@@ -108,43 +101,26 @@ impl Estimate {
     }
 }
 
-/// `a − b` wrapped into `[−π, π)`, for `a` and `b` already in `[−π, π)` (or any finite angles:
-/// falls back to [`wrap_angle`]).
-#[inline]
-fn angle_difference(a: f32, b: f32) -> f32 {
-    use core::f32::consts::{PI, TAU};
-    let d = a - b;
-    if d >= PI {
-        if d - TAU < PI {
-            return d - TAU;
-        }
-    } else if d < -PI {
-        if d + TAU >= -PI {
-            return d + TAU;
-        }
-    } else {
-        return d;
-    }
-    wrap_angle(d)
-}
-
-/// `(sin x, cos x)`: Taylor polynomials to degree 9 and 10 for `|x| ≤ 1` (truncation below
-/// 3e-8 and 2.1e-9), [`math::sin_cos`] beyond.
+/// `(sin x, cos x)`: Taylor polynomials to degree 5 and 6 for `|x| ≤ 0.5` (truncation below
+/// 1.6e-6 and 5e-8, and far less for the small deviations of a converged cloud: `x⁷/5040`),
+/// [`math::sin_cos`] beyond.
 #[inline]
 fn small_sin_cos(x: f32) -> (f32, f32) {
-    if x.abs() > 1.0 {
-        return math::sin_cos(x);
+    if x.abs() <= 0.5 {
+        let z = x * x;
+        let s = x + x * z * (-1.0 / 6.0 + z * (1.0 / 120.0));
+        let c = 1.0 - 0.5 * z + z * z * (1.0 / 24.0 + z * (-1.0 / 720.0));
+        (s, c)
+    } else {
+        math::sin_cos(x)
     }
-    let z = x * x;
-    let s = x + x * z * (-1.0 / 6.0 + z * (1.0 / 120.0 + z * (-1.0 / 5_040.0 + z / 362_880.0)));
-    let c = 1.0 - 0.5 * z
-        + z * z * (1.0 / 24.0 + z * (-1.0 / 720.0 + z * (1.0 / 40_320.0 - z / 3_628_800.0)));
-    (s, c)
 }
 
-/// Weighted sums of deviations from a centre.
-#[derive(Default)]
-struct Moments {
+/// Weighted sums of the deviations from a centre of the particles near it.
+pub(super) struct Moments {
+    center: Pose,
+    radius2_m2: f32,
+    half_angle_rad: f32,
     w: f32,
     x: f32,
     y: f32,
@@ -160,6 +136,38 @@ struct Moments {
 }
 
 impl Moments {
+    /// Nothing summed yet, about `center`, keeping particles within `radius_m` and
+    /// `half_angle_rad`.
+    pub(super) fn new(center: &Pose, radius_m: f32, half_angle_rad: f32) -> Self {
+        Self {
+            center: *center,
+            radius2_m2: radius_m * radius_m,
+            half_angle_rad,
+            w: 0.0,
+            x: 0.0,
+            y: 0.0,
+            t: 0.0,
+            sin: 0.0,
+            cos: 0.0,
+            xx: 0.0,
+            xy: 0.0,
+            xt: 0.0,
+            yy: 0.0,
+            yt: 0.0,
+            tt: 0.0,
+        }
+    }
+
+    /// Adds `p` with weight `w` if it is near the centre.
+    #[inline]
+    pub(super) fn add_if_near(&mut self, p: &Pose, w: f32) {
+        let (dx, dy) = (p.x_m - self.center.x_m, p.y_m - self.center.y_m);
+        let dt = wrap_once(p.theta_rad - self.center.theta_rad);
+        if dx * dx + dy * dy <= self.radius2_m2 && dt.abs() <= self.half_angle_rad {
+            self.add(w, dx, dy, dt);
+        }
+    }
+
     #[inline]
     fn add(&mut self, w: f32, dx: f32, dy: f32, dt: f32) {
         let (wx, wy, wt) = (w * dx, w * dy, w * dt);
@@ -178,9 +186,11 @@ impl Moments {
         self.tt += wt * dt;
     }
 
-    /// The estimate from the sums (`self.w > 0`); the ESS is left 0 for the caller.
-    fn estimate(&self, center: &Pose) -> Estimate {
-        let inv = 1.0 / self.w;
+    /// The estimate from the sums (the weights need not be normalized); the ESS is left 0 for
+    /// the caller. None when no particle with positive weight was near.
+    pub(super) fn estimate(&self) -> Option<Estimate> {
+        let inv = (self.w > 0.0).then(|| 1.0 / self.w)?;
+        let center = &self.center;
         let (mx, my, mt) = (self.x * inv, self.y * inv, self.t * inv);
         // The circular mean's offset from the centre; |offset| ≤ the largest |dθ|.
         let offset = math::atan2(self.sin, self.cos);
@@ -192,7 +202,7 @@ impl Moments {
         let yt = self.yt * inv - my * mt;
         // E[(dθ − offset)²] = E[dθ²] − 2·offset·E[dθ] + offset².
         let tt = (self.tt * inv - 2.0 * offset * mt + offset * offset).max(0.0);
-        Estimate {
+        Some(Estimate {
             pose: Pose::new(
                 center.x_m + mx,
                 center.y_m + my,
@@ -200,7 +210,7 @@ impl Moments {
             ),
             covariance: [[xx, xy, xt], [xy, yy, yt], [xt, yt, tt]],
             ess: 0.0,
-        }
+        })
     }
 }
 

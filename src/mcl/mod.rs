@@ -19,6 +19,7 @@
 
 pub mod config;
 pub mod estimate;
+mod fast;
 pub mod filter;
 pub mod motion;
 pub mod normal;

@@ -25,8 +25,9 @@
 //! One `u32` word `b` per attempt: layer `i = b & 127`, sign bit 7, and the 24-bit integer
 //! `m = b >> 8`, so `u = m·2⁻²⁴` and `x = m · ZIGGURAT_W[i]` with `ZIGGURAT_W[i] = xᵢ·2⁻²⁴`
 //! (rounded to f32). The fast test `x < xᵢ₊₁` is done in integers, exactly: `m < ZIGGURAT_K[i]
-//! = ⌈2²⁴·xᵢ₊₁/xᵢ⌉`. The wedge test and the tail use [`crate::math`]'s `exp` and `ln` and one
-//! more word each (two for a tail try). The tables were computed in f64 from the definition
+//! = ⌈2²⁴·xᵢ₊₁/xᵢ⌉`. The wedge test uses the filter's own `e^x` for `x ≤ 0` (within 3e-7
+//! relative, `src/mcl/fast.rs`), the tail [`crate::math`]'s `ln`; they take one more word
+//! each (two for a tail try). The tables were computed in f64 from the definition
 //! above (`r` by bisection on "the top layer ends at the peak") and rounded once;
 //! `host-tests/tests/mcl_ziggurat.rs` recomputes them and requires every entry to match bit for
 //! bit, and tests the draws against the normal CDF (Kolmogorov–Smirnov) and its moments.
@@ -36,6 +37,7 @@
 //! below 1e-30 with a sound generator; a broken one that returns a constant word could otherwise
 //! loop for ever) the last candidate is returned as it is.
 
+use super::fast::exp_nonpositive;
 use crate::gaussian::{uniform_f32, uniform_open_closed_f32};
 use crate::math;
 use rand_core::Rng;
@@ -88,7 +90,7 @@ fn slow<R: Rng + ?Sized>(mut word: u32, rng: &mut R) -> f32 {
             let lo = ZIGGURAT_F.get(i).copied().unwrap_or(0.0);
             let hi = ZIGGURAT_F.get(i + 1).copied().unwrap_or(1.0);
             let y = lo + uniform_f32(rng) * (hi - lo);
-            y < math::exp(-0.5 * x * x)
+            y < exp_nonpositive(-0.5 * x * x)
         };
         x = if negative { -x } else { x };
         if accepted {
