@@ -48,6 +48,7 @@ fn tracks_the_whole_intel_log() {
             kidnap: None,
             weighting: Weighting::Product,
             recovery: (0.0, 0.0),
+            recovery_while_unsettled: false,
             resample_ess: 0.5,
             scans: input.scans.len(),
         };
