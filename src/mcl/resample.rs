@@ -130,7 +130,7 @@ pub fn apply_counts(poses: &mut [Pose], counts: &mut [u16]) -> usize {
             }
         }
     }
-    n - filled
+    n.saturating_sub(filled)
 }
 
 #[cfg(test)]
