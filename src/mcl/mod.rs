@@ -19,8 +19,10 @@
 
 pub mod config;
 pub mod estimate;
+mod fast;
 pub mod filter;
 pub mod motion;
+pub mod normal;
 pub mod resample;
 pub mod rng;
 

@@ -25,7 +25,8 @@
 //! `|δrot − π|` (both wrapped), so a robot reversing 1 m does not get the noise of a half turn
 //! (AMCL does the same). Units: metres and radians throughout.
 
-use crate::gaussian::standard_normal_pair;
+use super::fast::{sin_cos_near, wrap_once};
+use super::normal::standard_normal_from;
 use crate::math;
 use crate::pose::{wrap_angle, Pose};
 use core::f32::consts::PI;
@@ -110,9 +111,11 @@ impl OdometryNoise {
     /// Draws the robot's new pose from `p(x' | step, x)` (Thrun Table 5.6).
     ///
     /// # Random numbers
-    /// Exactly four `next_u32`: two [`standard_normal_pair`]s, giving the noise of δrot1 and
-    /// δtrans (first pair) and of δrot2 (first value of the second pair; the second value is
-    /// discarded). The returned heading is wrapped into `[−π, π)`.
+    /// Three standard normals by the ziggurat ([`super::normal`]): the noise of δrot1 and
+    /// δtrans start from the low and high halves of one `next_u64`, that of δrot2 from one
+    /// `next_u32`, all three drawn first; about one normal in 80 then needs further words
+    /// (the ziggurat's slow path), in that order. The
+    /// returned heading is wrapped into `[−π, π)`.
     pub fn sample<R: Rng + ?Sized>(&self, pose: &Pose, step: &OdometryStep, rng: &mut R) -> Pose {
         sample_with(pose, step, self.sigmas(step), rng)
     }
@@ -124,19 +127,41 @@ impl OdometryNoise {
 pub fn sample_with<R: Rng + ?Sized>(
     pose: &Pose,
     step: &OdometryStep,
-    (s_rot1, s_trans, s_rot2): (f32, f32, f32),
+    sigmas: (f32, f32, f32),
     rng: &mut R,
 ) -> Pose {
-    let (n1, n2) = standard_normal_pair(rng);
-    let (n3, _) = standard_normal_pair(rng);
+    let pair = rng.next_u64();
+    let third = rng.next_u32();
+    sample_words(
+        pose,
+        step,
+        sigmas,
+        [pair as u32, (pair >> 32) as u32, third],
+        rng,
+    )
+}
+
+/// The motion sample whose three normals (the noise of δrot1, δtrans, δrot2) start from
+/// `words` ([`standard_normal_from`]); their rare slow paths draw more from `rng`.
+#[inline]
+pub(super) fn sample_words<R: Rng + ?Sized>(
+    pose: &Pose,
+    step: &OdometryStep,
+    (s_rot1, s_trans, s_rot2): (f32, f32, f32),
+    [w1, w2, w3]: [u32; 3],
+    rng: &mut R,
+) -> Pose {
+    let n1 = standard_normal_from(w1, rng);
+    let n2 = standard_normal_from(w2, rng);
+    let n3 = standard_normal_from(w3, rng);
     let rot1 = step.rot1_rad - s_rot1 * n1;
     let trans = step.trans_m - s_trans * n2;
     let rot2 = step.rot2_rad - s_rot2 * n3;
-    let (s, c) = math::sin_cos(pose.theta_rad + rot1);
+    let (s, c) = sin_cos_near(pose.theta_rad + rot1);
     Pose {
         x_m: pose.x_m + trans * c,
         y_m: pose.y_m + trans * s,
-        theta_rad: wrap_angle(pose.theta_rad + rot1 + rot2),
+        theta_rad: wrap_once(pose.theta_rad + rot1 + rot2),
     }
 }
 

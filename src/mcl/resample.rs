@@ -16,10 +16,16 @@ use rand_core::Rng;
 /// Counts how often Table 4.4 picks each particle when drawing `draws` particles from
 /// `weights` (which sum to 1), into `counts` (same length). The counts add up to `draws`.
 ///
+/// One pass over the particles rather than over the draws: with `r ~ U[0, 1/M)` the textbook's
+/// pointers are `uₘ = r + m/M`, `m = 0 … M−1`, and particle `i` is picked by those with
+/// `cᵢ₋₁ < uₘ ≤ cᵢ` (`cᵢ` the cumulative weight), so its count is `K(cᵢ) − K(cᵢ₋₁)` with
+/// `K(c) = min(M, ⌊(c − r)·M⌋ + 1)` for `c ≥ r` and 0 below: the number of pointers at or
+/// below `c`.
+///
 /// # Random numbers
 /// One `next_u32`: `r = u/draws` with `u` from [`uniform_f32`].
 ///
-/// Rounding: when the f32 cumulative sum stops short of a pointer `r + m/M` (a few ulps below
+/// Rounding: when the f32 cumulative sum stops short of the last pointers (a few ulps below
 /// 1), the last particle with non-zero weight takes the remaining picks.
 pub fn low_variance_counts<R: Rng + ?Sized>(
     weights: &[f32],
@@ -27,30 +33,57 @@ pub fn low_variance_counts<R: Rng + ?Sized>(
     draws: u16,
     rng: &mut R,
 ) {
-    counts.iter_mut().for_each(|c| *c = 0);
+    low_variance_counts_of_total(weights, 1.0, counts, draws, rng);
+}
+
+/// [`low_variance_counts`] for weights that sum to `total` (positive and finite) rather than
+/// 1: the pointers are `total·uₘ`, so particle `i`'s count is `K(cᵢ)` − `K(cᵢ₋₁)` with
+/// `K(c) = min(M, ⌊(c − r·total)·(M/total)⌋ + 1)`. With `total = 1` this is
+/// [`low_variance_counts`] exactly. Same random numbers.
+pub fn low_variance_counts_of_total<R: Rng + ?Sized>(
+    weights: &[f32],
+    total: f32,
+    counts: &mut [u16],
+    draws: u16,
+    rng: &mut R,
+) {
     let n = weights.len().min(counts.len());
     if n == 0 || draws == 0 {
+        counts.iter_mut().for_each(|c| *c = 0);
         return;
     }
-    let step = 1.0 / f32::from(draws);
-    let r = uniform_f32(rng) * step;
-    let mut i = 0usize;
-    let mut c = weights.first().copied().unwrap_or(0.0);
-    let mut last_positive = 0usize;
-    for m in 0..draws {
-        let u = r + f32::from(m) * step;
-        while u > c && i + 1 < n {
-            i += 1;
-            let w = weights.get(i).copied().unwrap_or(0.0);
-            if w > 0.0 {
-                last_positive = i;
-            }
-            c += w;
-        }
-        // Past the end by rounding: give the pick to the last particle that had weight.
-        let pick = if u > c { last_positive } else { i };
-        if let Some(k) = counts.get_mut(pick) {
-            *k = k.saturating_add(1);
+    let m = f32::from(draws);
+    let r = uniform_f32(rng) / m;
+    let start = r * total;
+    let scale = m / total;
+    let draws = u32::from(draws);
+    let mut cumulative = 0.0f32;
+    let mut below = 0u32;
+    for (&w, c) in weights.iter().zip(counts.iter_mut()) {
+        cumulative += w;
+        let reached = (cumulative - start) * scale;
+        // ⌊(c − r)·M⌋ + 1 for c ≥ r, else 0 (pointers at or below c), at most M. A NaN
+        // (a NaN weight) counts as nothing reached.
+        let k = if reached >= 0.0 {
+            ((reached as u32).saturating_add(1)).min(draws)
+        } else {
+            below
+        };
+        let k = k.max(below);
+        *c = (k - below) as u16;
+        below = k;
+    }
+    counts.iter_mut().skip(n).for_each(|c| *c = 0);
+    if below < draws {
+        // Rounding left the last pointers past the cumulative sum: they go to the last
+        // particle with positive weight (or the last one, if none has).
+        let last = weights
+            .iter()
+            .take(n)
+            .rposition(|&w| w > 0.0)
+            .unwrap_or(n - 1);
+        if let Some(c) = counts.get_mut(last) {
+            *c = c.saturating_add((draws - below) as u16);
         }
     }
 }
@@ -64,13 +97,21 @@ pub fn low_variance_counts<R: Rng + ?Sized>(
 pub fn apply_counts(poses: &mut [Pose], counts: &mut [u16]) -> usize {
     let n = poses.len().min(counts.len());
     let mut dest = 0usize;
+    let mut filled = 0usize;
     for src in 0..n {
-        let extra = counts.get(src).copied().unwrap_or(0).saturating_sub(1);
+        let count = counts.get(src).copied().unwrap_or(0);
+        if count == 0 {
+            continue;
+        }
+        filled += 1;
+        if count == 1 {
+            continue;
+        }
         if let Some(c) = counts.get_mut(src) {
-            *c = (*c).min(1);
+            *c = 1;
         }
         let pose = poses.get(src).copied().unwrap_or_default();
-        for _ in 0..extra {
+        for _ in 1..count {
             while dest < n && counts.get(dest).copied().unwrap_or(1) != 0 {
                 dest += 1;
             }
@@ -83,9 +124,13 @@ pub fn apply_counts(poses: &mut [Pose], counts: &mut [u16]) -> usize {
             if let Some(c) = counts.get_mut(dest) {
                 *c = 1;
             }
+            // A slot ahead of `src` is counted when `src` reaches it.
+            if dest < src {
+                filled += 1;
+            }
         }
     }
-    counts.iter().take(n).filter(|&&c| c == 0).count()
+    n.saturating_sub(filled)
 }
 
 #[cfg(test)]
@@ -138,5 +183,45 @@ mod tests {
         let mut counts = [0u16, 0, 0, 4];
         assert_eq!(apply_counts(&mut poses, &mut counts), 0);
         assert!(poses.iter().all(|p| p.x_m == 3.0));
+    }
+
+    #[test]
+    fn counts_match_the_textbook_pointers_in_f64() {
+        // Table 4.4 as written, one pointer at a time, in f64, with the same r.
+        let mut rng = SplitMix64::new(21);
+        let mut weight_rng = SplitMix64::new(22);
+        for trial in 0..200u16 {
+            let n = 1 + usize::from(trial % 61);
+            let mut w: Vec<f32> = (0..n)
+                .map(|_| {
+                    let u = uniform_f32(&mut weight_rng);
+                    if u < 0.2 {
+                        0.0
+                    } else {
+                        u * u * u
+                    }
+                })
+                .collect();
+            w[n / 2] += 0.01;
+            let total: f32 = w.iter().sum();
+            w.iter_mut().for_each(|x| *x /= total);
+            let draws = 1 + trial % 97;
+            let mut probe = rng;
+            let r = f64::from(uniform_f32(&mut probe) / f32::from(draws));
+            let mut want = vec![0u16; n];
+            let (mut i, mut c) = (0usize, f64::from(w[0]));
+            for m in 0..draws {
+                let u = r + f64::from(m) / f64::from(draws);
+                while u > c && i + 1 < n {
+                    i += 1;
+                    c += f64::from(w[i]);
+                }
+                want[i] += 1;
+            }
+            let mut got = vec![0u16; n];
+            low_variance_counts(&w, &mut got, draws, &mut rng);
+            assert_eq!(rng, probe);
+            assert_eq!(got, want, "trial {trial}");
+        }
     }
 }

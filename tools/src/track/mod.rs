@@ -4,7 +4,8 @@
 //! The shared logs carry corrected poses and no raw odometry, so odometry is synthesized:
 //! starting at the first logged pose, each step between consecutive logged poses (Thrun's
 //! `(δrot1, δtrans, δrot2)`) is perturbed by the filter's own motion model
-//! ([`OdometryNoise::sample`], AMCL's `odom_alpha1..4` variance convention) and chained. The
+//! (the variances of [`beamfield::mcl::OdometryNoise::sigmas`], AMCL's `odom_alpha1..4` convention, drawn with
+//! Box–Muller normals by `odometry_sample`, not the filter's ziggurat) and chained. The
 //! filter sees only these odometry poses and the scans; the logged poses are the truth it is
 //! scored against.
 //!
@@ -105,6 +106,12 @@ pub struct TrackArgs {
     /// the default "0,0" turns it off, as AMCL's defaults do).
     #[arg(long, default_value = "0,0")]
     pub recovery: String,
+    /// Inject recovery particles only while the filter has not settled; settled: its
+    /// estimate's spread under 15 cm and 0.1 rad, and its moves matching the odometry's within
+    /// 15 cm and 0.1 rad, for 20 scans in a row (the filter's own view, not the logged poses).
+    /// A guard against recovery hijacking a tracked cloud.
+    #[arg(long = "recovery-while-unsettled")]
+    pub recovery_while_unsettled: bool,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -204,6 +211,7 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         kidnap: args.kidnap,
         weighting: args.weighting,
         recovery: (r[0], r[1]),
+        recovery_while_unsettled: args.recovery_while_unsettled,
         resample_ess: args.resample_ess,
         scans: args.scans.unwrap_or(scans).min(scans),
     })
@@ -278,7 +286,7 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
             "scans": o.scans, "particles": o.particles, "kappa": o.kappa, "stride": o.stride,
             "odom_alphas": o.alphas, "init": format!("{:?}", o.init).to_lowercase(),
             "weighting": format!("{:?}", o.weighting), "recovery": [o.recovery.0, o.recovery.1],
-            "kidnap": o.kidnap, "runs": per,
+            "recovery_while_unsettled": o.recovery_while_unsettled, "kidnap": o.kidnap, "runs": per,
             "trans_rmse_cm_min_med_max": rmse, "heading_rmse_deg_min_med_max": head,
             "max_trans_m_min_med_max": maxe, "within_10cm_2deg_pct_min_med_max": within,
             "lost_runs": lost, "converged_runs": conv_ok.len(),
@@ -288,7 +296,7 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
     }
     let mut s = format!(
         "{} scans, {} particles, κ {}, stride {}, odom_alpha {:?}, init {:?}, weighting {:?}, \
-         recovery {:?}{}\n",
+         recovery {:?}{}{}\n",
         o.scans,
         o.particles,
         o.kappa,
@@ -297,6 +305,11 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
         o.init,
         o.weighting,
         o.recovery,
+        if o.recovery_while_unsettled {
+            " while unsettled"
+        } else {
+            ""
+        },
         o.kidnap
             .map(|k| format!(", kidnapped at scan {k}"))
             .unwrap_or_default()

@@ -3,10 +3,11 @@
 use crate::carmen::{CarmenLog, ReadOptions};
 use crate::score_cmd::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
+use beamfield::gaussian::standard_normal_pair;
 use beamfield::mcl::{
     Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64,
 };
-use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, SensorMount, Tempered};
+use beamfield::{math, wrap_angle, BeamLayout, Pose, Reading, Scan, SensorMount, Tempered};
 use std::io::IsTerminal;
 use std::path::Path;
 
@@ -112,6 +113,8 @@ pub struct RunOptions {
     pub weighting: Weighting,
     /// (recovery_alpha_slow, recovery_alpha_fast).
     pub recovery: (f32, f32),
+    /// Inject recovery particles only while the filter has not settled (see `Settled`).
+    pub recovery_while_unsettled: bool,
     /// ESS fraction below which the set is resampled.
     pub resample_ess: f32,
     /// Scans to run (at most the log's).
@@ -223,8 +226,9 @@ fn amcl_cube(
 }
 
 /// The synthesized odometry of run seed `seed`: starting at the first logged pose, each step
-/// between consecutive logged poses is perturbed by `noise` ([`OdometryNoise::sample`], drawing
-/// from [`SplitMix64`] seeded `seed ^ ODOMETRY_SEED_XOR`) and chained. One pose per logged pose
+/// between consecutive logged poses is perturbed by `noise` (the variances of
+/// [`OdometryNoise::sigmas`], drawn by [`odometry_sample`] from [`SplitMix64`] seeded
+/// `seed ^ ODOMETRY_SEED_XOR`) and chained. One pose per logged pose
 /// (none for none). The filter sees the steps between consecutive odometry poses; the firmware's
 /// track asset (`firmware/assets/track.rs`) is written from the same function.
 ///
@@ -242,13 +246,40 @@ pub fn synthesize_odometry(
             (Some(prev), Some(odom)) => {
                 let step = OdometryStep::between(prev, truth)
                     .map_err(|e| usage(format!("logged pose {k}: {e}")))?;
-                noise.sample(odom, &step, &mut odom_rng)
+                odometry_sample(noise, odom, &step, &mut odom_rng)
             }
             _ => *truth,
         };
         out.push(next);
     }
     Ok(out)
+}
+
+/// One draw of the odometry model for the synthesized odometry: the model of
+/// [`OdometryNoise::sample`], with its normals from the Box–Muller transform
+/// ([`standard_normal_pair`], four `next_u32`: δrot1 and δtrans from the first pair, δrot2 from
+/// the first value of the second) rather than the filter's ziggurat, so that the data the
+/// filter is measured on does not come from the filter's own sampler. (The filter used
+/// Box–Muller until it moved to the ziggurat for speed; this keeps the synthesized odometry,
+/// and the firmware's track asset, as they were.)
+pub fn odometry_sample(
+    noise: &OdometryNoise,
+    pose: &Pose,
+    step: &OdometryStep,
+    rng: &mut SplitMix64,
+) -> Pose {
+    let (s_rot1, s_trans, s_rot2) = noise.sigmas(step);
+    let (n1, n2) = standard_normal_pair(rng);
+    let (n3, _) = standard_normal_pair(rng);
+    let rot1 = step.rot1_rad() - s_rot1 * n1;
+    let trans = step.trans_m() - s_trans * n2;
+    let rot2 = step.rot2_rad() - s_rot2 * n3;
+    let (s, c) = math::sin_cos(pose.theta_rad + rot1);
+    Pose {
+        x_m: pose.x_m + trans * c,
+        y_m: pose.y_m + trans * s,
+        theta_rad: wrap_angle(pose.theta_rad + rot1 + rot2),
+    }
 }
 
 /// Runs the filter over the log once.
@@ -303,13 +334,21 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
     };
     let progress = std::io::stderr().is_terminal();
     let odom = synthesize_odometry(&noise, input.logged.get(..n).unwrap_or(&[]), o.seed)?;
+    let mut settled = Settled::default();
+    let mut seen = OdometryStep::STILL;
     for k in 0..n {
         let truth = input.logged[k];
         if k > 0 {
-            let seen = OdometryStep::between(&odom[k - 1], &odom[k])
+            seen = OdometryStep::between(&odom[k - 1], &odom[k])
                 .map_err(|e| usage(format!("odometry {k}: {e}")))?;
             mcl.predict(&seen, &mut rng);
         }
+        // While settled, no free space: no random particles (the averages still follow).
+        let free_now = if o.recovery_while_unsettled && settled.done() {
+            None
+        } else {
+            free.as_ref()
+        };
         if o.kidnap == Some(k) {
             if let Some(f) = &free {
                 kidnap(&mut mcl, f, &truth, &mut kidnap_rng);
@@ -319,7 +358,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         let result = match o.weighting {
             Weighting::Product => {
                 let prepared = model.prepare(&input.layout, scan);
-                mcl.update_prepared(&prepared, free.as_ref(), &mut rng)
+                mcl.update_prepared(&prepared, free_now, &mut rng)
             }
             Weighting::AmclCube => {
                 if scan.is_empty() {
@@ -327,7 +366,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
                 } else {
                     mcl.update_with(
                         |p| amcl_cube(&view, &input.params, &input.layout, scan, o.stride, p),
-                        free.as_ref(),
+                        free_now,
                         &mut rng,
                     )
                 }
@@ -337,6 +376,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             Ok(u) => {
                 out.resamplings += usize::from(u.resampled);
                 out.injected += u64::from(u.injected);
+                settled.observe(&u.estimate, &seen);
                 u.estimate.pose
             }
             Err(MclError::EmptyScan | MclError::AllImpossible) => {
@@ -362,6 +402,58 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         }
     }
     Ok(out)
+}
+
+/// The filter's own test of having settled, for `--recovery-while-unsettled`. Settled: for
+/// [`Settled::SCANS`] updates in a row, each estimate lies within [`Settled::MOVE_M`] and
+/// [`Settled::MOVE_RAD`] of the previous one moved by the odometry step, and the estimate's
+/// standard deviations are at most [`Settled::SPREAD_M`] and [`Settled::SPREAD_RAD`]. Settled
+/// ends after [`Settled::MISSES`] updates in a row that break the first test: a single jump
+/// (often a random particle winning for a scan, the hijacking this guards against) does not
+/// end it. Uses nothing but the filter's output and the odometry.
+#[derive(Default)]
+struct Settled {
+    previous: Option<Pose>,
+    streak: usize,
+    misses: usize,
+    settled: bool,
+}
+
+impl Settled {
+    const SPREAD_M: f32 = 0.15;
+    const SPREAD_RAD: f32 = 0.1;
+    const MOVE_M: f32 = 0.15;
+    const MOVE_RAD: f32 = 0.1;
+    const SCANS: usize = 20;
+    const MISSES: usize = 5;
+
+    fn observe(&mut self, e: &beamfield::mcl::Estimate, step: &OdometryStep) {
+        let c = &e.covariance;
+        let tight =
+            c[0][0].max(c[1][1]).sqrt() <= Self::SPREAD_M && c[2][2].sqrt() <= Self::SPREAD_RAD;
+        let consistent = self.previous.is_some_and(|prev| {
+            let moved = step.apply(&prev);
+            (moved.x_m - e.pose.x_m).hypot(moved.y_m - e.pose.y_m) <= Self::MOVE_M
+                && wrap_angle(moved.theta_rad - e.pose.theta_rad).abs() <= Self::MOVE_RAD
+        });
+        self.previous = Some(e.pose);
+        if tight && consistent {
+            self.streak += 1;
+            self.misses = 0;
+        } else {
+            self.streak = 0;
+            self.misses += 1;
+        }
+        if self.streak >= Self::SCANS {
+            self.settled = true;
+        } else if self.misses >= Self::MISSES {
+            self.settled = false;
+        }
+    }
+
+    fn done(&self) -> bool {
+        self.settled
+    }
 }
 
 /// Moves the whole cloud rigidly so that the truth lands on a free pose at least
