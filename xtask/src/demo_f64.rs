@@ -281,3 +281,31 @@ pub fn check(out: &str, blob: &[u8]) -> Result<Vec<ScanCheck>, String> {
     }
     Ok(checks)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{delta_cells, printed, term};
+
+    #[test]
+    fn reads_the_device_line() {
+        let out = "scan 50: best (9.909, -18.937, 179.5 deg) offset 2.5 cm 0.0 deg; weight 0.038 ESS 59.0 of 6069; lag-1 0.31 over 171 beams\n";
+        let p = printed(out, 50).unwrap();
+        assert_eq!(p.best, [9.909, -18.937, 179.5]);
+        assert_eq!((p.weight, p.ess), (0.038, 59.0));
+        assert!(printed(out, 51).is_err());
+    }
+
+    /// The term at distance 0 is `ln(z_hit/(σ√(2π)) + z_rand/z_max)` and falls with the
+    /// distance; the endpoint box stays far below a cell at the longest Intel range (81.83 m,
+    /// 1,637 cells), so the 9-point box search is enough.
+    #[test]
+    fn terms_and_box() {
+        let step = 2.0 / 255.0;
+        let want0 = (0.95 / (0.0588f64 * (2.0 * std::f64::consts::PI).sqrt()) + 0.05 / 81.83).ln();
+        assert!((term(0, step) - want0).abs() < 1e-6, "{}", term(0, step));
+        assert!((1..=255).all(|c| term(c, step) <= term(c - 1, step)));
+        assert!(term(255, step) < term(0, step) - 5.0);
+        let d = delta_cells(1000.0, 1000.0, 1637.0);
+        assert!(d < 0.01, "{d}");
+    }
+}
