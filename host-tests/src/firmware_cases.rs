@@ -157,6 +157,24 @@ pub fn cases() -> Vec<Case> {
     for (z, zs) in [(5.001f32, 5.0f32), (5.5, 5.0), (6.0, 5.0), (9.0, 1.0)] {
         out.push(case("hit only (log path, floor)", hit_only, z, zs));
     }
+    // The short component on the log-space path: no max or uniform weight, a narrow Gaussian
+    // and a steep exponential, so the linear mixture underflows (below 1e-30) while the short
+    // term `ln z_short + ln λ − λz − ln(1 − e^(−λz*))` is the largest (or, last pair, tied
+    // with the hit term). A wrong sign or a dropped term in that expression moves these
+    // values by tens of nats.
+    let short_log = [0.5, 0.5, 0.0, 0.0, 0.01, 5.0, 40.0];
+    for (z, zs) in [
+        (20.0f32, 25.0f32),
+        (30.0, 30.5),
+        (24.84, 25.0),
+        (36.0, 39.0),
+    ] {
+        out.push(case("short on the log path", short_log, z, zs));
+    }
+    let short_steep = [0.2, 0.8, 0.0, 0.0, 0.02, 50.0, 10.0];
+    for (z, zs) in [(2.0f32, 2.5f32), (1.5, 2.0)] {
+        out.push(case("short on the log path", short_steep, z, zs));
+    }
     let wide = [0.5, 0.2, 0.1, 0.2, 50.0, 0.05, 20.0];
     for (z, zs) in [(0.0f32, 0.0f32), (19.0, 10.0), (3.0, 7.0)] {
         out.push(case("wide sigma", wide, z, zs));

@@ -9,6 +9,7 @@ pub mod firmware_cases;
 pub mod firmware_models;
 pub mod landmark_correlation_cases;
 pub mod reference;
+pub mod reference_backend;
 pub mod sonar_sim;
 pub mod sonar_uci;
 pub mod splitmix;

@@ -368,3 +368,64 @@ fn hostile_scan_never_nan() {
     let per = r::beam_log_likelihood(&toy(), f64::INFINITY, f64::NAN).unwrap();
     assert!((f64::from(s.log_likelihood) - 90.0 * per).abs() < 90.0 * beam_tol(per) + 1e-4);
 }
+
+/// The short component on the log-space path (Thrun Table 6.1's `p_short`, taken as a logarithm
+/// where the mixture underflows f32): no max or uniform weight, a narrow Gaussian and a steep
+/// exponential put the mixture below the crate's linear-space threshold (1e-30), and the f64
+/// reference's short term is the largest component or within a few nats of the hit term. The
+/// expected values come from the reference; tolerance as in the table at the top of this file.
+#[test]
+fn short_component_on_the_log_path_matches_reference() {
+    let short_log = Intrinsics {
+        z_hit: 0.5,
+        z_short: 0.5,
+        z_max: 0.0,
+        z_rand: 0.0,
+        sigma_hit: 0.01,
+        lambda_short: 5.0,
+        max_range: 40.0,
+    };
+    let steep = Intrinsics {
+        z_hit: 0.2,
+        z_short: 0.8,
+        z_max: 0.0,
+        z_rand: 0.0,
+        sigma_hit: 0.02,
+        lambda_short: 50.0,
+        max_range: 10.0,
+    };
+    let cases: &[(&Intrinsics, f32, f32)] = &[
+        (&short_log, 20.0, 25.0),
+        (&short_log, 30.0, 30.5),
+        (&short_log, 24.84, 25.0),
+        (&short_log, 36.0, 39.0),
+        (&short_log, 15.0, 39.0),
+        (&steep, 2.0, 2.5),
+        (&steep, 1.5, 2.0),
+    ];
+    for &(p, z, zs) in cases {
+        let (zf, zsf) = (f64::from(z), f64::from(zs));
+        let want = r::beam_log_likelihood(p, zf, zsf).unwrap();
+        let [l_hit, l_short, _, _] = r::log_weighted_components(p, zf, zsf).unwrap();
+        // The case exercises what it claims: the mixture underflows and p_short carries it.
+        assert!(
+            want < (1e-30f64).ln(),
+            "z={z} z*={zs}: {want} is not on the log path"
+        );
+        assert!(
+            l_short > l_hit - 5.0,
+            "z={z} z*={zs}: short term {l_short} vs hit {l_hit}"
+        );
+        assert!(want > BEAM_LOG_FLOOR as f64, "z={z} z*={zs}: at the floor");
+        let m = crate_model(p);
+        assert!(
+            m.beam_likelihood(z, zs) < 1e-30,
+            "z={z} z*={zs}: linear path taken"
+        );
+        let got = f64::from(m.beam_log_likelihood(z, zs).unwrap());
+        assert!(
+            (got - want).abs() <= beam_tol(want),
+            "z={z} z*={zs}: {got} vs reference {want}"
+        );
+    }
+}

@@ -82,7 +82,7 @@ fn facade_errors_within_documented_bounds() {
         name: "sin_cos [-2pi,2pi]",
         // The crate's own sin_cos (src/trig.rs, 2026-11-29: 6.33e-8 measured); libm's sincosf,
         // used before, measured 3.0e-8 here.
-        bound: (6.4e-8, 1.1e-3),
+        bound: host_tests::reference_backend::SIN_COS_ABS_BOUNDS,
         relative: false,
         worst: 0.0,
     };

@@ -327,11 +327,40 @@ impl<'a> FieldView<'a> {
     /// point to the map's rectangle when it lies off the map.
     ///
     /// Inside the map the result is at most `d_max`, or at most [`FieldView::clamp_m`] for a
-    /// blob with a clamp, where that value means "this far or farther"; NaN input gives NaN.
+    /// blob with a clamp, where that value means "this far or farther". Every finite point gives a finite result,
+    /// however far off the map (1e18 m, `±f32::MAX`): the off-map part is computed in metres
+    /// on halved coordinates with a scaled hypotenuse, so no intermediate square or difference
+    /// overflows, and a distance beyond `f32::MAX` (possible only for points near `±f32::MAX`
+    /// with the map far on the other side) saturates at `f32::MAX`. An infinite coordinate
+    /// gives `f32::MAX`; a NaN coordinate gives NaN (there is no point to measure from).
     pub fn distance_m(&self, x_m: f32, y_m: f32) -> f32 {
+        if x_m.is_nan() || y_m.is_nan() {
+            return f32::NAN;
+        }
         let (gx, gy) = self.to_grid(x_m, y_m);
-        let (code, off2) = self.lookup_grid(gx, gy);
-        f32::from(code) * self.step_m + crate::math::sqrt(off2) * self.header.cell_size_m
+        // The nearest cell's code: `lookup_grid` clamps the (possibly infinite) grid point.
+        let (code, _) = self.lookup_grid(gx, gy);
+        let h = &self.header;
+        // Half the offset from the point to the map's rectangle along each axis: halving
+        // before subtracting keeps every difference of two finite f32s finite (and is exact
+        // down to subnormals).
+        let half_off = |p: f32, lo: f32, cells: u32| {
+            let hi = lo + cells as f32 * h.cell_size_m;
+            let nearest = p.max(lo).min(hi);
+            (0.5 * p - 0.5 * nearest).abs()
+        };
+        let hx = half_off(x_m, h.origin_x_m, h.width);
+        let hy = half_off(y_m, h.origin_y_m, h.height);
+        let (big, small) = (hx.max(hy), hx.min(hy));
+        let half = if big == 0.0 {
+            0.0
+        } else if big == f32::INFINITY {
+            f32::INFINITY
+        } else {
+            let r = small / big;
+            big * crate::math::sqrt(1.0 + r * r)
+        };
+        (f32::from(code) * self.step_m + 2.0 * half).min(f32::MAX)
     }
 
     /// `1 / cell_size`, cells per metre.

@@ -148,6 +148,17 @@ pub fn demo(board: Board, encoding: DemoEncoding) -> Result {
                 );
             }
             println!("{}", crate::demo_ref::check(&out, &raw)?);
+            let f64_checks = crate::demo_f64::check(&out, &raw)?;
+            for c in &f64_checks {
+                println!(
+                    "f64 reference: scan {}: weight {:.4} in [{:.4}, {:.4}], ESS {:.2} in [{:.2}, {:.2}] (widest pose bracket ±{:.4} nats)",
+                    c.log_index, c.weight.0, c.weight.1, c.weight.2, c.ess.0, c.ess.1, c.ess.2, c.worst_e
+                );
+            }
+            println!(
+                "f64 reference: the device's best pose, weight and ESS of all {} scans lie within the bounds of an independent f64 scoring of every hypothesis",
+                f64_checks.len()
+            );
             Ok(())
         }
         124 => Err(format!("the demo did not finish within {QEMU_TIMEOUT_S} s")),

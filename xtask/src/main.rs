@@ -3,6 +3,7 @@
 
 mod budgets;
 mod demo;
+mod demo_f64;
 mod demo_ref;
 mod lidar;
 mod lidar_ref;
