@@ -1,7 +1,7 @@
 //! The model and the layout with which the Intel lab log's scans are scored on the device and
 //! recomputed on the host: a tempered likelihood field over a distance-field blob, and the log's
-//! FLASER layout. Included by the plan files that need them (`lidar_plan.rs`), so the firmware
-//! and the host build them from the same lines.
+//! FLASER layout. Included by the plan files that need them (`lidar_plan.rs`, `track_plan.rs`),
+//! so the firmware and the host build them from the same lines.
 //!
 //! Only `core` and `beamfield`: it compiles for the Cortex-M and the host alike.
 

@@ -15,13 +15,13 @@
 use beamfield::mcl::{
     Estimate, Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64, Update,
 };
-use beamfield::{
-    math, wrap_angle, BeamLayout, FieldView, LikelihoodField, LikelihoodParams, Pose, Scan,
-    SensorMount, Tempered,
-};
+use beamfield::{math, wrap_angle, Pose, Scan};
 
-/// Beams per FLASER scan of the Intel log.
-pub const BEAMS: usize = 180;
+// `cargo xtask` includes this plan and `lidar_plan.rs`, each with its own copy of the setup.
+#[allow(clippy::duplicate_mod)]
+#[path = "intel_setup.rs"]
+mod intel_setup;
+pub use intel_setup::BEAMS;
 /// Particles (18 bytes each of RAM: 9,000 bytes of [`Particles`]).
 pub const PARTICLES: usize = 500;
 /// Tempering κ: `beamfield calibrate`'s value on this log (`beamfield track`'s default).
@@ -127,19 +127,9 @@ pub fn run<const N: usize>(
     mut mark: impl FnMut(bool),
     mut on_step: impl FnMut(&Step),
 ) -> Result<Summary, &'static str> {
-    let view = FieldView::parse(blob).map_err(|_| "map blob rejected")?;
-    let params = LikelihoodParams::new(Z_HIT, Z_RAND, SIGMA_HIT_M, max_range_m)
-        .map_err(|_| "likelihood parameters rejected")?;
-    let tempered = Tempered::new(LikelihoodField::new(view, params), KAPPA, 1)
-        .map_err(|_| "tempering rejected")?;
-    let layout = BeamLayout::<BEAMS>::uniform(
-        -core::f32::consts::FRAC_PI_2,
-        core::f32::consts::PI / BEAMS as f32,
-        BEAMS,
-        max_range_m,
-        SensorMount::CENTERED,
-    )
-    .map_err(|_| "beam layout rejected")?;
+    let tempered =
+        intel_setup::tempered_field(blob, Z_HIT, Z_RAND, SIGMA_HIT_M, max_range_m, KAPPA)?;
+    let layout = intel_setup::layout(max_range_m)?;
     let noise = OdometryNoise::uniform(alpha).map_err(|_| "odometry noise rejected")?;
     let config =
         MclConfig::new(noise, RESAMPLE_ESS, 0.0, 0.0).map_err(|_| "configuration rejected")?;

@@ -32,7 +32,8 @@ pub struct FieldView<'a> {
     header: FieldHeader,
     cells: Cells<'a>,
     /// Encoding 1's codes, empty for a tiled blob: the hot paths read this slice and take the
-    /// out-of-line [`FieldView::code_slow`] on a miss, so encoding 1 pays nothing for encoding 2.
+    /// out-of-line `code_slow` on a miss (only with `tiled-field`; without it a miss is `None`), so
+    /// encoding 1 pays nothing for encoding 2.
     raw: &'a [u8],
     width_f: f32,
     height_f: f32,
@@ -229,20 +230,24 @@ impl<'a> FieldView<'a> {
             .wrapping_add(ix as usize);
         match self.raw.get(i) {
             Some(&c) => Some(c),
+            // Without the tiled reader a miss has no other place to look: no call in the hot
+            // loops (a call there, even a cold one, costs the per-pose path registers and about
+            // 3 instructions per beam, docs/firmware.md).
+            #[cfg(not(feature = "tiled-field"))]
+            None => None,
+            #[cfg(feature = "tiled-field")]
             None => self.code_slow(ix, iy),
         }
     }
 
     /// [`FieldView::code_on_map`] past encoding 1's slice: a tiled blob's cell (or `None`).
     /// Out of line, so the raw read stays the hot paths' only code.
+    #[cfg(feature = "tiled-field")]
     #[inline(never)]
     #[cold]
     fn code_slow(&self, ix: u32, iy: u32) -> Option<u8> {
-        #[cfg(not(feature = "tiled-field"))]
-        let _ = (ix, iy);
         match self.cells {
             Cells::Raw(_) => None,
-            #[cfg(feature = "tiled-field")]
             Cells::Tiled(t) => t.code(ix, iy),
         }
     }

@@ -23,6 +23,13 @@
 //! The decoder only accepts VerLen `0x2C` (the fixed 12-point frame all three sensors send).
 //! After a failed checksum it looks for the next header candidate inside the rejected bytes, so
 //! a truncated frame costs only itself, not the frame that follows it.
+//!
+//! The CRC-8 lets through about one damaged window in 256, so a frame whose CRC passed must also
+//! be plausible ([`Ld06Frame::is_plausible`]): a rotation speed within the manuals' 5–13 Hz
+//! ([`MIN_SPEED_DEG_PER_S`] ..= [`MAX_SPEED_DEG_PER_S`]) and a span from the start to the end
+//! angle no wider than twelve points can cover at that speed ([`Ld06Frame::max_span_cdeg`]). A
+//! frame that fails is treated as a window the CRC should have caught: counted in
+//! `implausible_frames`, none of its points emitted, its bytes searched for the next header.
 
 use super::sync::HeaderHunt;
 use super::{bump, range_units, room, DecoderStats, EncodeError, LidarPoint};
@@ -40,6 +47,14 @@ pub const POINTS_PER_FRAME: usize = 12;
 pub const FULL_TURN_CDEG: u16 = 36_000;
 /// The sensor's timestamp wraps at this many milliseconds.
 pub const TIMESTAMP_WRAP_MS: u16 = 30_000;
+/// Slowest rotation the LD06 and LD19 manuals specify, degrees per second (5 Hz).
+pub const MIN_SPEED_DEG_PER_S: u16 = 1_800;
+/// Fastest rotation the LD06 and LD19 manuals specify, degrees per second (13 Hz).
+pub const MAX_SPEED_DEG_PER_S: u16 = 4_680;
+/// The sample rate [`Ld06Frame::max_span_cdeg`] assumes, samples per second: below every rate
+/// the sensors are known to sample at (the LD06 manual's 4,500 Hz; the LD19 manual's example
+/// frame, 10.43° over 11 steps at 2,152 °/s, was sampled at about 2,270 Hz).
+pub const SAMPLE_RATE_FLOOR_HZ: u32 = 2_250;
 
 /// The LD06 CRC-8 (polynomial `0x4D`, init 0, not reflected, no final XOR). Its check value
 /// (the CRC of ASCII `123456789`) is `0xC3`.
@@ -79,6 +94,15 @@ pub enum Ld06Error {
     },
     /// A start or end angle ≥ 360°.
     AngleOutOfRange,
+    /// The CRC passed but the frame is not one the sensor can send: its rotation speed is outside
+    /// 5–13 Hz or its span is wider than twelve points cover at that speed
+    /// ([`Ld06Frame::is_plausible`]).
+    Implausible {
+        /// Rotation speed carried, degrees per second.
+        speed_deg_per_s: u16,
+        /// Span from the start to the end angle, hundredths of a degree.
+        span_cdeg: u16,
+    },
 }
 
 impl core::fmt::Display for Ld06Error {
@@ -90,6 +114,13 @@ impl core::fmt::Display for Ld06Error {
                 write!(f, "crc {carried:#04x} carried, {computed:#04x} computed")
             }
             Self::AngleOutOfRange => f.write_str("angle of 360 degrees or more"),
+            Self::Implausible {
+                speed_deg_per_s,
+                span_cdeg,
+            } => write!(
+                f,
+                "implausible frame: span of {span_cdeg} hundredths of a degree at {speed_deg_per_s} degrees per second"
+            ),
         }
     }
 }
@@ -140,11 +171,11 @@ fn le16(lo: u8, hi: u8) -> u16 {
 }
 
 impl Ld06Frame {
-    /// Parses and checks one frame: header, CRC, then angle ranges.
+    /// Parses and checks one frame: header, CRC, angle ranges, then plausibility.
     ///
     /// # Errors
     /// [`Ld06Error::Truncated`], [`Ld06Error::BadHeader`], [`Ld06Error::BadChecksum`],
-    /// [`Ld06Error::AngleOutOfRange`].
+    /// [`Ld06Error::AngleOutOfRange`], [`Ld06Error::Implausible`].
     pub fn parse(bytes: &[u8]) -> Result<Self, Ld06Error> {
         let b: &[u8; FRAME_LEN] = bytes
             .get(..FRAME_LEN)
@@ -166,7 +197,36 @@ impl Ld06Frame {
         if frame.start_angle_cdeg >= FULL_TURN_CDEG || frame.end_angle_cdeg >= FULL_TURN_CDEG {
             return Err(Ld06Error::AngleOutOfRange);
         }
+        if !frame.is_plausible() {
+            return Err(Ld06Error::Implausible {
+                speed_deg_per_s: frame.speed_deg_per_s,
+                span_cdeg: frame.span_cdeg(),
+            });
+        }
         Ok(frame)
+    }
+
+    /// The widest span from the start to the end angle a frame can have at `speed_deg_per_s`,
+    /// hundredths of a degree: twelve sample periods at [`SAMPLE_RATE_FLOOR_HZ`], and half as
+    /// much again for the speed's variation within a frame (the slack LDROBOT's own drivers
+    /// allow), i.e. `1.5 · 12 · speed / 2,250` degrees, `0.8 · speed` hundredths of a degree
+    /// (37.44° at [`MAX_SPEED_DEG_PER_S`]). The true span is 11 sample periods.
+    pub const fn max_span_cdeg(speed_deg_per_s: u16) -> u32 {
+        // 100 · 1.5 · 12 · speed / rate, in integers.
+        speed_deg_per_s as u32 * (100 * 3 * POINTS_PER_FRAME as u32) / (2 * SAMPLE_RATE_FLOOR_HZ)
+    }
+
+    /// True when the frame is one the sensor can send: speed within [`MIN_SPEED_DEG_PER_S`]
+    /// ..= [`MAX_SPEED_DEG_PER_S`] and [`Ld06Frame::span_cdeg`] at most
+    /// [`Ld06Frame::max_span_cdeg`] of that speed. Angles are assumed `< 36,000` (checked
+    /// before).
+    #[inline]
+    pub fn is_plausible(&self) -> bool {
+        let v = self.speed_deg_per_s;
+        // span ≤ max_span_cdeg(v) without the division: 2 · rate · span ≤ 3,600 · v.
+        (MIN_SPEED_DEG_PER_S..=MAX_SPEED_DEG_PER_S).contains(&v)
+            && 2 * SAMPLE_RATE_FLOOR_HZ * u32::from(self.span_cdeg())
+                <= 100 * 3 * POINTS_PER_FRAME as u32 * u32::from(v)
     }
 
     /// Reads the fields without any check.
@@ -305,7 +365,8 @@ impl Ld06Decoder {
     }
 
     /// Feeds received bytes; `on_point` is called for each of the 12 points of every frame
-    /// whose CRC passed, in order, as soon as the frame's last byte arrives.
+    /// whose CRC passed and whose content is valid and plausible, in order, as soon as the
+    /// frame's last byte arrives.
     ///
     /// Inside a frame the bytes are copied in one block, not pushed one by one: the per-byte work
     /// is the copy, the CRC and the share of the frame's 12 points.
@@ -345,38 +406,50 @@ impl Ld06Decoder {
         // in place, then build the frame once, where it is kept.
         let buf = &self.hunt.buf;
         let crc_ok = crc8(buf.get(..FRAME_LEN - 1).unwrap_or(&[])) == buf[FRAME_LEN - 1];
-        let parsed = if crc_ok {
+        // 0: accepted; 1: whole but impossible (an angle ≥ 360°); 2: implausible; 3: bad CRC.
+        let verdict = if crc_ok {
             let prev = self.last.take();
             let f = self.last.insert(Ld06Frame::fields(buf));
-            if f.start_angle_cdeg < FULL_TURN_CDEG && f.end_angle_cdeg < FULL_TURN_CDEG {
-                Ok(())
+            let v = if f.start_angle_cdeg >= FULL_TURN_CDEG || f.end_angle_cdeg >= FULL_TURN_CDEG {
+                1
+            } else if f.is_plausible() {
+                0
             } else {
+                2
+            };
+            if v != 0 {
                 // `last_frame` keeps the last frame that was accepted.
                 self.last = prev;
-                Err(Ld06Error::AngleOutOfRange)
             }
+            v
         } else {
-            Err(Ld06Error::BadHeader)
+            3
         };
-        match parsed {
-            Ok(()) => {
-                self.hunt.accept();
-                let stats = &mut self.hunt.counter.stats;
+        let stats = &mut self.hunt.counter.stats;
+        match verdict {
+            0 => {
                 bump(&mut stats.frames_ok);
+                stats.points = stats.points.saturating_add(POINTS_PER_FRAME as u32);
+                self.hunt.accept();
                 if let Some(frame) = &self.last {
                     frame.points(on_point);
                 }
-                stats.points = stats.points.saturating_add(POINTS_PER_FRAME as u32);
             }
-            Err(Ld06Error::AngleOutOfRange) => {
+            1 => {
                 // The CRC vouches for the bytes: the frame is whole, only its content is bad.
+                bump(&mut stats.bad_frames);
                 self.hunt.drop_frame();
-                bump(&mut self.hunt.counter.stats.bad_frames);
             }
-            Err(_) => {
-                bump(&mut self.hunt.counter.stats.bad_checksum);
-                // Re-examine the rejected bytes after the header: keep the first `0x54` that is
-                // followed by `0x2C` (or that ends the buffer) as the start of the next frame.
+            v => {
+                // A failed CRC, or a frame no sensor sends (most likely damage the CRC let
+                // through, or a header met inside another frame): re-examine the rejected
+                // bytes after the header and keep the first `0x54` that is followed by `0x2C`
+                // (or that ends the buffer) as the start of the next frame.
+                bump(if v == 2 {
+                    &mut stats.implausible_frames
+                } else {
+                    &mut stats.bad_checksum
+                });
                 self.hunt.rehunt(HEADER, |b| b == VER_LEN);
             }
         }
@@ -625,6 +698,147 @@ mod tests {
         d.feed(&frame, |_| n += 1);
         assert_eq!(d.last_frame(), Some(&good));
         assert_eq!(n, 12);
+    }
+
+    fn frame_bytes(f: &Ld06Frame) -> [u8; FRAME_LEN] {
+        let mut b = [0u8; FRAME_LEN];
+        f.emit(&mut b).unwrap();
+        b
+    }
+
+    fn with(speed_deg_per_s: u16, start_angle_cdeg: u16, end_angle_cdeg: u16) -> Ld06Frame {
+        Ld06Frame {
+            speed_deg_per_s,
+            start_angle_cdeg,
+            end_angle_cdeg,
+            ..sample_frame()
+        }
+    }
+
+    /// Decodes `bytes` in one call: (points, stats, the byte accounting holds).
+    fn decode(bytes: &[u8]) -> (Vec<LidarPoint>, DecoderStats, Option<Ld06Frame>) {
+        let mut d = Ld06Decoder::new();
+        let mut pts = Vec::new();
+        d.feed(bytes, |p| pts.push(p));
+        let s = d.stats();
+        assert_eq!(
+            s.bytes as usize,
+            FRAME_LEN * (s.frames_ok + s.bad_frames) as usize
+                + s.skipped_bytes as usize
+                + d.buffered()
+        );
+        (pts, s, d.last_frame().copied())
+    }
+
+    #[test]
+    fn span_bound_is_twelve_samples_at_2250_hz_plus_half() {
+        // 1.5 · 12 · v / 2,250 degrees, by hand: 3,600 °/s → 28.8°; 4,680 °/s → 37.44°;
+        // 1,800 °/s → 14.4°; 2,152 °/s → 17.216° (rounded down to the hundredth).
+        assert_eq!(Ld06Frame::max_span_cdeg(3600), 2880);
+        assert_eq!(Ld06Frame::max_span_cdeg(4680), 3744);
+        assert_eq!(Ld06Frame::max_span_cdeg(1800), 1440);
+        assert_eq!(Ld06Frame::max_span_cdeg(2152), 1721);
+    }
+
+    #[test]
+    fn plausibility_limits_on_speed_and_span() {
+        // (speed, start, end, plausible)
+        for (v, a, b, want) in [
+            (3600, 1000, 3880, true),    // span 28.80°, the bound
+            (3600, 1000, 3881, false),   // 28.81°
+            (3600, 35_000, 1880, true),  // 350° → 18.8°, across 0°: 28.80°
+            (3600, 35_000, 1881, false), // 28.81° across 0°
+            (1800, 0, 1100, true),       // the slowest speed
+            (1799, 0, 1100, false),
+            (4680, 0, 1100, true), // the fastest
+            (4681, 0, 1100, false),
+            (0, 0, 0, false),
+            (u16::MAX, 0, 1100, false),
+            (3600, 10_000, 9_999, false), // 359.99°: the end just behind the start
+        ] {
+            let f = with(v, a, b);
+            assert_eq!(f.is_plausible(), want, "{v} °/s, {a} → {b}");
+            let parsed = Ld06Frame::parse(&frame_bytes(&f));
+            if want {
+                assert_eq!(parsed, Ok(f));
+            } else {
+                assert_eq!(
+                    parsed,
+                    Err(Ld06Error::Implausible {
+                        speed_deg_per_s: v,
+                        span_cdeg: f.span_cdeg()
+                    })
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn crc_valid_frame_with_absurd_span_is_counted_and_yields_no_points() {
+        let good = sample_frame();
+        // 100° → 300°: twelve points over 200° at 10 Hz; the CRC is right.
+        let absurd = with(3600, 10_000, 30_000);
+        let mut stream = frame_bytes(&absurd).to_vec();
+        let (pts, s, last) = decode(&stream);
+        assert!(pts.is_empty());
+        assert_eq!(
+            (s.frames_ok, s.implausible_frames, s.bad_checksum),
+            (0, 1, 0)
+        );
+        assert_eq!((s.bad_frames, s.points), (0, 0));
+        assert_eq!(last, None);
+        // A good frame after it is decoded, and `last_frame` is the good one.
+        stream.extend_from_slice(&frame_bytes(&good));
+        stream.extend_from_slice(&frame_bytes(&absurd));
+        let (pts, s, last) = decode(&stream);
+        assert_eq!(pts, (0..12).map(|i| good.point(i)).collect::<Vec<_>>());
+        assert_eq!((s.frames_ok, s.implausible_frames), (1, 2));
+        assert_eq!(last, Some(good));
+        // A CRC-valid frame whose speed is out of range, with a normal span.
+        let (pts, s, _) = decode(&frame_bytes(&with(20_000, 0, 1100)));
+        assert!(pts.is_empty());
+        assert_eq!(s.implausible_frames, 1);
+    }
+
+    #[test]
+    fn implausible_window_gives_back_the_frame_that_starts_inside_it() {
+        // A window that opens with `54 2C`, passes its CRC by chance and ends with the first 20
+        // bytes of a good frame: its end angle is made of the good frame's bytes 15..17 (sample
+        // 3's distance, 1,021 mm → 10.21°), its start is 200°, so its span is 170.21°.
+        let good = sample_frame();
+        let g = frame_bytes(&good);
+        let k = 20;
+        let mut w = [0u8; FRAME_LEN];
+        w[..6].copy_from_slice(&[HEADER, VER_LEN, 0x10, 0x0E, 0x20, 0x4E]); // 3,600 °/s, 200°
+        w[FRAME_LEN - k..].copy_from_slice(&g[..k]);
+        // Choose byte 10 so the CRC over bytes 0..46 equals the byte at 46 (one value does: the
+        // CRC of a fixed-length message is a bijection of any one of its bytes).
+        let fit: Vec<u8> = (0..=255u8)
+            .filter(|&x| {
+                w[10] = x;
+                crc8_bitwise(&w[..46]) == w[46]
+            })
+            .collect();
+        assert_eq!(fit.len(), 1);
+        w[10] = fit[0];
+        let window = Ld06Frame::parse(&w);
+        assert_eq!(
+            window,
+            Err(Ld06Error::Implausible {
+                speed_deg_per_s: 3600,
+                span_cdeg: 17_021
+            })
+        );
+        assert!(!w[1..FRAME_LEN - k]
+            .windows(2)
+            .any(|p| p == [HEADER, VER_LEN]));
+        let mut stream = w[..FRAME_LEN - k].to_vec();
+        stream.extend_from_slice(&g);
+        let (pts, s, last) = decode(&stream);
+        assert_eq!(pts, (0..12).map(|i| good.point(i)).collect::<Vec<_>>());
+        assert_eq!((s.frames_ok, s.implausible_frames), (1, 1));
+        assert_eq!(s.skipped_bytes as usize, FRAME_LEN - k);
+        assert_eq!(last, Some(good));
     }
 
     #[test]

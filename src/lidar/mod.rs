@@ -89,6 +89,12 @@ pub struct DecoderStats {
     /// Frames whose checksum passed but whose content is impossible (e.g. an angle ≥ 360°); none
     /// of their points was emitted.
     pub bad_frames: u32,
+    /// Frames whose checksum passed but which the sensor cannot have sent (LD06: a rotation
+    /// speed or an angular span outside the protocol's limits), taken for damage the checksum
+    /// missed: none of their points was emitted, and their bytes were treated as those of a
+    /// frame whose checksum failed (skipped up to the next header candidate). Always 0 for the
+    /// decoders without such a check.
+    pub implausible_frames: u32,
     /// Bytes discarded while searching for a frame header (start-up garbage, the rest of a
     /// frame whose checksum failed up to the next header candidate, lost alignment).
     pub skipped_bytes: u32,

@@ -27,6 +27,7 @@ impl SkipCounter {
                 frames_ok: 0,
                 bad_checksum: 0,
                 bad_frames: 0,
+                implausible_frames: 0,
                 skipped_bytes: 0,
                 resyncs: 0,
                 points: 0,

@@ -161,11 +161,23 @@ pub fn demo(board: Board, encoding: DemoEncoding) -> Result {
             );
             Ok(())
         }
-        124 => Err(format!("the demo did not finish within {QEMU_TIMEOUT_S} s")),
-        134 => Err(format!("QEMU stopped with a CPU lockup on `{machine}`")),
-        c => Err(format!(
-            "the demo exited {c} under QEMU ({machine}): a scan could not be scored"
+        c => Err(qemu_failure(
+            c,
+            "the demo",
+            machine,
+            "a scan could not be scored",
         )),
+    }
+}
+
+/// The error for a firmware program (`what`, e.g. "the demo") that exited `code` (not 0) under
+/// QEMU on `machine`: 124 is `timeout` killing it after [`QEMU_TIMEOUT_S`] seconds, 134 a CPU
+/// lockup (QEMU aborts), any other code the program's own failure, explained by `cause`.
+pub fn qemu_failure(code: i32, what: &str, machine: &str, cause: &str) -> String {
+    match code {
+        124 => format!("{what} did not finish within {QEMU_TIMEOUT_S} s"),
+        134 => format!("QEMU stopped with a CPU lockup on `{machine}`"),
+        c => format!("{what} exited {c} under QEMU ({machine}): {cause}"),
     }
 }
 

@@ -331,6 +331,14 @@ pub fn lidar(count: bool, split: bool) -> Result {
             reference.frames_ok, reference.bad_checksum
         ));
     }
+    // Every frame of the plan is a 360-point revolution's at 3,600 °/s (11° per frame, the
+    // plausible span at that speed is up to 28.8°): none may be taken for damage.
+    if reference.implausible_frames != 0 {
+        return Err(format!(
+            "the plan's frames are all plausible; the decoder took {} for damage",
+            reference.implausible_frames
+        ));
+    }
     if reference.scans.len() != plan.scans {
         return Err(format!(
             "{} revolutions sent, {} scans assembled",
@@ -365,7 +373,7 @@ pub fn lidar(count: bool, split: bool) -> Result {
         ));
     }
     println!(
-        "plan: {frames_ok} frames decoded and {flips} rejected for their checksum as corrupted; every beam of the {} scans equals the log's range to the millimetre except the {} in corrupted frames; every best pose within {} cm and {} deg of the logged pose (worst {:.1} cm, {:.1} deg), mean heading offset {:.2} deg (accepted: {} deg)",
+        "plan: {frames_ok} frames decoded and {flips} rejected for their checksum as corrupted, none rejected as implausible; every beam of the {} scans equals the log's range to the millimetre except the {} in corrupted frames; every best pose within {} cm and {} deg of the logged pose (worst {:.1} cm, {:.1} deg), mean heading offset {:.2} deg (accepted: {} deg)",
         plan.scans,
         plan.missing.iter().map(|&m| u32::from(m)).sum::<u32>(),
         ACCEPT_M * 100.0,

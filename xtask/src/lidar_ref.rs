@@ -154,6 +154,8 @@ pub struct Reference {
     pub frames_ok: u32,
     /// See `frames_ok`.
     pub bad_checksum: u32,
+    /// Frames whose checksum passed but that no LD06 can send (speed or span out of bounds).
+    pub implausible_frames: u32,
 }
 
 /// Decodes, assembles and scores `bytes` on the host exactly as the firmware does.
@@ -231,6 +233,7 @@ pub fn reference(bytes: &[u8], blob: &[u8]) -> Result<Reference, String> {
         ),
         frames_ok: d.frames_ok,
         bad_checksum: d.bad_checksum,
+        implausible_frames: d.implausible_frames,
     })
 }
 

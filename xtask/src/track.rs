@@ -8,8 +8,8 @@
 mod track_plan;
 
 use super::budgets::{llvm_tool, sections};
-use super::demo::{build, build_and_run, Board};
-use super::{cargo, insncount_dir, repo_root, run, run_counted, Result, QEMU_TIMEOUT_S};
+use super::demo::{build, build_and_run, qemu_failure, Board};
+use super::{cargo, insncount_dir, repo_root, run, run_counted, Result};
 use beamfield::mcl::Particles;
 use track_plan::{Step, Summary, TrackScan, PARTICLES};
 
@@ -155,12 +155,11 @@ pub fn track(board: Board) -> Result {
             }
             Ok(())
         }
-        124 => Err(format!(
-            "the track did not finish within {QEMU_TIMEOUT_S} s"
-        )),
-        134 => Err(format!("QEMU stopped with a CPU lockup on `{machine}`")),
-        c => Err(format!(
-            "the track exited {c} under QEMU ({machine}): its input was rejected"
+        c => Err(qemu_failure(
+            c,
+            "the track",
+            machine,
+            "its input was rejected",
         )),
     }
 }
