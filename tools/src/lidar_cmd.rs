@@ -154,6 +154,16 @@ pub fn encode_scans<const N: usize>(
             "--rpm must be in (0, 3000]".to_string(),
         ));
     }
+    let ld06_rpm = |deg_per_s: u16| f32::from(deg_per_s) / 6.0;
+    let (lo, hi) = (
+        ld06_rpm(beamfield::lidar::ld06::MIN_SPEED_DEG_PER_S),
+        ld06_rpm(beamfield::lidar::ld06::MAX_SPEED_DEG_PER_S),
+    );
+    if options.format == Format::Ld06 && !(lo..=hi).contains(&options.rpm) {
+        return Err(LidarCmdError::BadOption(format!(
+            "--rpm must be in [{lo}, {hi}] for ld06: the decoder takes frames at other speeds as implausible (docs/lidar.md)"
+        )));
+    }
     if !(options.noise_m.is_finite() && options.noise_m >= 0.0) {
         return Err(LidarCmdError::BadOption(
             "--noise must be a finite number of metres >= 0".to_string(),
@@ -495,6 +505,7 @@ fn stats_json(d: &DecoderStats) -> serde_json::Value {
         "frames_ok": d.frames_ok,
         "bad_checksum": d.bad_checksum,
         "bad_frames": d.bad_frames,
+        "implausible_frames": d.implausible_frames,
         "skipped_bytes": d.skipped_bytes,
         "resyncs": d.resyncs,
         "points": d.points,
@@ -580,7 +591,7 @@ fn run_decode(a: &DecodeArgs, json: bool) -> Result<String, LidarCmdError> {
     let s = &d.decoder;
     let asm = &d.assembler;
     let mut out = format!(
-        "{}: {} bytes, {} frames ok, {} bad checksum, {} bad frames, {} bytes skipped ({} resyncs)\n\
+        "{}: {} bytes, {} frames ok, {} bad checksum, {} bad frames, {} implausible frames, {} bytes skipped ({} resyncs)\n\
          {} points: {} binned, {} flagged invalid, {} out of range, {} low quality, {} outside the layout, {} replaced\n\
          {} scans ({} revolutions missed)",
         a.format.name(),
@@ -588,6 +599,7 @@ fn run_decode(a: &DecodeArgs, json: bool) -> Result<String, LidarCmdError> {
         s.frames_ok,
         s.bad_checksum,
         s.bad_frames,
+        s.implausible_frames,
         s.skipped_bytes,
         s.resyncs,
         asm.points,

@@ -155,6 +155,26 @@ fn errors_are_typed_and_help_explains() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--rpm must be in (0, 3000]"), "{err}");
+    // A speed the LD06 decoder rejects as implausible (1,200 °/s, under 1,800) is refused at
+    // encoding time, with the range that works.
+    let out = beamfield(&[
+        "lidar",
+        "encode",
+        "--log",
+        &intel(),
+        "--format",
+        "ld06",
+        "--rpm",
+        "200",
+        "-o",
+        &tmp("slow.bin"),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--rpm must be in [300, 780] for ld06"),
+        "{err}"
+    );
     let out = beamfield(&[
         "lidar",
         "decode",
