@@ -354,6 +354,14 @@ impl AnyDecoder {
         }
     }
 
+    /// The end of a recording: hands out what a decoder holds back (the YDLIDAR decoder's last
+    /// packet, which waits for the next packet's header); nothing for the others.
+    pub fn finish(&mut self, on_point: impl FnMut(LidarPoint)) {
+        if let Self::Ydlidar(d) = self {
+            d.flush(on_point);
+        }
+    }
+
     /// The decoder's counters.
     pub fn stats(&self) -> DecoderStats {
         match self {
@@ -393,12 +401,14 @@ pub fn decode_stream<const N: usize>(
     let mut assembler = ScanAssembler::new(layout, config).map_err(LidarCmdError::Assembler)?;
     let mut scans = Vec::new();
     let mut revolutions = Vec::new();
-    decoder.feed(bytes, |p| {
+    let mut on_point = |p| {
         if assembler.push(p).is_some() {
             scans.push(assembler.scan().ranges_m().to_vec());
             revolutions.push(assembler.revolution());
         }
-    });
+    };
+    decoder.feed(bytes, &mut on_point);
+    decoder.finish(&mut on_point);
     if assembler.finish().is_some() {
         scans.push(assembler.scan().ranges_m().to_vec());
         revolutions.push(assembler.revolution());
