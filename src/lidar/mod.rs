@@ -77,7 +77,8 @@ pub struct LidarPoint {
 /// Every byte fed is accounted for: `bytes == frame_len · (frames_ok + bad_frames) +
 /// skipped_bytes + buffered`, where `buffered` is the length of the partial frame the decoder
 /// holds (bytes of a frame whose checksum failed are either skipped or re-examined as the start
-/// of the next frame).
+/// of the next frame). YDLIDAR packets differ in length: there the first term is the decoder's
+/// `frame_bytes()`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DecoderStats {
