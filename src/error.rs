@@ -15,6 +15,7 @@ use crate::lidar::assembler::AssemblerError;
 use crate::lidar::ld06::Ld06Error;
 use crate::lidar::rplidar::RplidarError;
 use crate::lidar::xv11::Xv11Error;
+use crate::lidar::ydlidar::YdlidarError;
 use crate::lidar::EncodeError;
 use crate::mcl::{MclError, MotionError};
 use crate::raycast::RayCastError;
@@ -74,6 +75,8 @@ pub enum Error {
     Rplidar(RplidarError),
     /// An XV-11 packet could not be built ([`crate::lidar::xv11`]).
     Xv11(Xv11Error),
+    /// A YDLIDAR packet could not be read ([`crate::lidar::ydlidar`]).
+    Ydlidar(YdlidarError),
     /// A scan assembler could not be set up ([`crate::lidar::ScanAssembler`]).
     Assembler(AssemblerError),
     /// The fixed-point path was refused ([`crate::fixed_point`]).
@@ -113,6 +116,7 @@ impl core::fmt::Display for Error {
             Self::Ld06(e) => write!(f, "ld06: {e}"),
             Self::Rplidar(e) => write!(f, "rplidar: {e}"),
             Self::Xv11(e) => write!(f, "xv11: {e}"),
+            Self::Ydlidar(e) => write!(f, "ydlidar: {e}"),
             Self::Assembler(e) => write!(f, "scan assembler: {e}"),
             #[cfg(feature = "fixed")]
             Self::Fixed(e) => write!(f, "fixed point: {e}"),
@@ -150,6 +154,7 @@ impl core::error::Error for Error {
             Self::Ld06(e) => e,
             Self::Rplidar(e) => e,
             Self::Xv11(e) => e,
+            Self::Ydlidar(e) => e,
             Self::Assembler(e) => e,
             #[cfg(feature = "fixed")]
             Self::Fixed(e) => e,
@@ -199,6 +204,7 @@ from_error! {
     Ld06Error => Ld06,
     RplidarError => Rplidar,
     Xv11Error => Xv11,
+    YdlidarError => Ydlidar,
     AssemblerError => Assembler,
     #[cfg(feature = "fixed")] crate::fixed_point::FixedError => Fixed,
     #[cfg(feature = "hal")] crate::sonar::driver::ConfigError => SonarConfig,

@@ -135,6 +135,24 @@ fn every_other_error_type_converts() {
     assert_eq!(check_wrapped(e, "xv11"), Error::Xv11(e));
 }
 
+#[test]
+fn a_rejected_ydlidar_packet_converts() {
+    use beamfield::lidar::ydlidar::{YdlidarError, YdlidarPacket};
+    // The YDLidar-SDK protocol document's zero packet with its check code's low byte changed.
+    let bad = [
+        0xAA, 0x55, 0x01, 0x01, 0x53, 0xAE, 0x53, 0xAE, 0xAC, 0x54, 0x00, 0x00,
+    ];
+    let e = YdlidarPacket::parse(&bad).expect_err("a wrong check code");
+    assert_eq!(
+        e,
+        YdlidarError::BadChecksum {
+            carried: 0x54AC,
+            computed: 0x54AB
+        }
+    );
+    assert_eq!(check_wrapped(e, "ydlidar"), Error::Ydlidar(e));
+}
+
 /// The ring driver's bus error keeps its `ErrorKind`; it has no `source` (the bus error itself is
 /// generic and not stored).
 #[test]

@@ -1,4 +1,4 @@
-//! The three protocols end to end on the real Intel lab log, through the same stream builder and
+//! The four protocols end to end on the real Intel lab log, through the same stream builder and
 //! decoder front-end as `beamfield lidar encode/decode` (`beamfield_tools::lidar_cmd`):
 //! round trips to each protocol's resolution, the wrong decoder for a stream, and property tests
 //! over random damage of real streams.
@@ -109,12 +109,62 @@ fn ld06_round_trips_through_the_cli_stream_builder() {
     round_trip(Format::Ld06);
 }
 
+/// YDLIDAR: the decoder applies the X4's triangulation correction, so the stream builder sends at
+/// each rotor angle the range of the beam its corrected angle lands on (`ydlidar_rotor_samples`):
+/// every range that comes back must be the logged range of its beam to the quarter millimetre;
+/// beams no rotor angle lands on come back NaN (counted and bounded here).
+#[test]
+fn ydlidar_round_trips_the_whole_intel_log() {
+    let format = Format::Ydlidar;
+    let scans = intel();
+    let bytes = stream(format, scans);
+    let l = carmen_layout(format);
+    let d = decode_stream(format, &l, AssemblerConfig::for_layout(&l), &bytes).unwrap();
+    assert_eq!(d.scans.len(), scans.len());
+    let half = 0.5 * f64::from(format.resolution_m());
+    let (mut n_back, mut n_lost, mut n_nan, mut worst) = (0usize, 0usize, 0usize, 0.0f64);
+    for (k, (got, want)) in d.scans.iter().zip(scans).enumerate() {
+        assert_eq!(got.len(), want.len());
+        for (i, (&g, &w)) in got.iter().zip(want).enumerate() {
+            if !carried(format, w) {
+                assert!(g.is_nan(), "scan {k} beam {i}: got {g}, logged {w}");
+                n_nan += 1;
+            } else if g.is_nan() {
+                n_lost += 1;
+            } else {
+                let err = (f64::from(g) - f64::from(w)).abs();
+                assert!(
+                    err <= half + 2.0 * f64::from(f32::EPSILON) * f64::from(w),
+                    "scan {k} beam {i}: got {g}, logged {w}"
+                );
+                worst = worst.max(err);
+                n_back += 1;
+            }
+        }
+    }
+    let s = d.decoder;
+    assert_eq!((s.bad_checksum, s.bad_frames), (0, 0));
+    assert_eq!(s.skipped_bytes, 29);
+    // Every revolution is one zero packet and nine packets of at most 40 samples.
+    assert_eq!(s.frames_ok as usize, 10 * scans.len());
+    // Beams whose range lands between two rotor angles' corrected angles: a few per cent.
+    assert!(n_lost * 20 < n_back, "{n_lost} lost, {n_back} back");
+    println!(
+        "ydlidar: {} scans, {n_back} ranges back (worst error {:.4} mm), {n_lost} carried but not \
+         landed on their beam, {n_nan} not carried, {} bytes",
+        scans.len(),
+        worst * 1e3,
+        bytes.len()
+    );
+}
+
 #[test]
 fn the_wrong_decoder_finds_nothing() {
     let scans = &intel()[..30];
-    for sent in [Format::Ld06, Format::Rplidar, Format::Xv11] {
+    let all = [Format::Ld06, Format::Rplidar, Format::Xv11, Format::Ydlidar];
+    for sent in all {
         let bytes = stream(sent, scans);
-        for chosen in [Format::Ld06, Format::Rplidar, Format::Xv11] {
+        for chosen in all {
             if chosen == sent {
                 continue;
             }

@@ -5,7 +5,7 @@
 //! such a stream into the crate's [`Scan<N>`](crate::scan::Scan) on a caller's
 //! [`BeamLayout<N>`](crate::scan::BeamLayout) in two independent steps:
 //!
-//! 1. a **decoder** per sensor family ([`ld06`], [`rplidar`], [`xv11`]) is a byte-at-a-time state machine. Feed it any
+//! 1. a **decoder** per sensor family ([`ld06`], [`rplidar`], [`xv11`], [`ydlidar`]) is a byte-at-a-time state machine. Feed it any
 //!    slice of received bytes (an interrupt's byte, a DMA half-buffer) with `feed`; it finds the
 //!    frame header, resynchronises after garbage or lost bytes, verifies the frame's checksum and
 //!    only then hands every point of the frame to the caller's closure as a [`LidarPoint`]. It
@@ -46,6 +46,7 @@ pub mod ld06;
 pub mod rplidar;
 mod sync;
 pub mod xv11;
+pub mod ydlidar;
 
 pub use assembler::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution, ScanAssembler};
 
@@ -76,7 +77,8 @@ pub struct LidarPoint {
 /// Every byte fed is accounted for: `bytes == frame_len · (frames_ok + bad_frames) +
 /// skipped_bytes + buffered`, where `buffered` is the length of the partial frame the decoder
 /// holds (bytes of a frame whose checksum failed are either skipped or re-examined as the start
-/// of the next frame).
+/// of the next frame). YDLIDAR packets differ in length: there the first term is the decoder's
+/// `frame_bytes()`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DecoderStats {
@@ -170,6 +172,7 @@ macro_rules! stream_decoder {
 stream_decoder!(ld06::Ld06Decoder);
 stream_decoder!(rplidar::RplidarDecoder);
 stream_decoder!(xv11::Xv11Decoder);
+stream_decoder!(ydlidar::YdlidarDecoder);
 
 /// `out[..needed]`: the room an encoder writes into.
 ///

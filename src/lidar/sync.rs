@@ -141,16 +141,37 @@ impl<const LEN: usize> HeaderHunt<LEN> {
 
     /// The frame held failed its checksum: keep, as the start of the next frame, the first
     /// header candidate after its first byte (`first` followed by a byte `second` accepts, or a
-    /// `first` that ends the buffer); the bytes before it are skipped.
+    /// `first` that ends the bytes held); the bytes before it are skipped.
     pub(crate) fn rehunt(&mut self, first: u8, second: impl Fn(u8) -> bool) {
-        let rest = self.buf.get(1..).unwrap_or(&[]);
-        let next = rest
+        let held = self.len.min(LEN);
+        let next = 1 + Self::candidate(self.buf.get(1..held).unwrap_or(&[]), first, second);
+        self.counter.skip(next);
+        self.buf.copy_within(next.min(held)..held, 0);
+        self.len = held.saturating_sub(next);
+    }
+
+    /// Frames of varying length: the first `n` bytes held were a whole frame (counted by the
+    /// caller, not skipped); keep what follows from its first header candidate on (the bytes
+    /// before it are skipped). Only a frame that was read back from the bytes of a rejected one
+    /// leaves bytes behind it.
+    pub(crate) fn take_front(&mut self, n: usize, first: u8, second: impl Fn(u8) -> bool) {
+        let held = self.len.min(LEN);
+        let n = n.min(held);
+        let p = Self::candidate(self.buf.get(n..held).unwrap_or(&[]), first, second);
+        self.counter.synced();
+        if p > 0 {
+            self.counter.skip(p);
+        }
+        self.buf.copy_within((n + p).min(held)..held, 0);
+        self.len = held.saturating_sub(n + p);
+    }
+
+    /// Where the first header candidate of `bytes` starts (`bytes.len()` when there is none).
+    fn candidate(bytes: &[u8], first: u8, second: impl Fn(u8) -> bool) -> usize {
+        bytes
             .windows(2)
             .position(|w| matches!(*w, [a, b] if a == first && second(b)))
-            .or_else(|| (rest.last() == Some(&first)).then(|| rest.len() - 1))
-            .map_or(LEN, |p| p + 1);
-        self.counter.skip(next);
-        self.buf.copy_within(next.., 0);
-        self.len = LEN - next;
+            .or_else(|| (bytes.last() == Some(&first)).then(|| bytes.len() - 1))
+            .unwrap_or(bytes.len())
     }
 }

@@ -8,6 +8,7 @@ use beamfield::lidar::assembler::sample_revolution;
 use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
 use beamfield::lidar::rplidar::{self, RplidarDecoder};
 use beamfield::lidar::xv11::{self, Xv11Decoder, Xv11Reading};
+use beamfield::lidar::ydlidar::{self, YdlidarDecoder};
 use beamfield::lidar::{
     AssemblerConfig, AssemblerError, AssemblerStats, DecoderStats, EncodeError, LidarPoint,
     Revolution, ScanAssembler,
@@ -32,6 +33,9 @@ pub enum Format {
     Rplidar,
     /// Neato XV-11 / Xiaomi LDS02RR: 22-byte packets with checksum, 115,200 baud.
     Xv11,
+    /// YDLIDAR X4 / X2 / G4: `AA 55` packets of up to 40 samples with an XOR check code,
+    /// triangulation angle correction, 128,000 baud (X4).
+    Ydlidar,
 }
 
 impl Format {
@@ -41,6 +45,7 @@ impl Format {
             Self::Ld06 => "ld06",
             Self::Rplidar => "rplidar",
             Self::Xv11 => "xv11",
+            Self::Ydlidar => "ydlidar",
         }
     }
 
@@ -50,6 +55,7 @@ impl Format {
             Self::Ld06 => 65.535,
             Self::Rplidar => 16.383_75,
             Self::Xv11 => 16.383,
+            Self::Ydlidar => ydlidar::MAX_RANGE_M,
         }
     }
 
@@ -57,7 +63,7 @@ impl Format {
     pub fn resolution_m(self) -> f32 {
         match self {
             Self::Ld06 | Self::Xv11 => 0.001,
-            Self::Rplidar => 0.000_25,
+            Self::Rplidar | Self::Ydlidar => 0.000_25,
         }
     }
 }
@@ -185,6 +191,8 @@ pub fn encode_scans<const N: usize>(
         out.extend_from_slice(&rplidar::SCAN_DESCRIPTOR);
     }
     let mut rev = vec![0.0f32; POINTS_PER_REV];
+    // YDLIDAR: the previous revolution's ranges (see `ydlidar_rotor_samples`).
+    let mut prev: Option<Vec<f32>> = None;
     let mut frames = vec![0u8; POINTS_PER_REV * 8];
     for (k, ranges) in scans.iter().enumerate() {
         let scan = Scan::<N>::from_ranges(ranges).map_err(LidarCmdError::Layout)?;
@@ -218,9 +226,17 @@ pub fn encode_scans<const N: usize>(
                 let speed = (options.rpm * 64.0).round().clamp(0.0, 65_535.0) as u16;
                 xv11::encode_revolution(&readings, speed, &mut frames)
             }
+            Format::Ydlidar => {
+                let freq = (options.rpm / 6.0).round().clamp(0.0, 127.0) as u8;
+                let q2 = ydlidar_rotor_samples(prev.as_deref(), &rev);
+                ydlidar::encode_revolution(&q2, YDLIDAR_PER_PACKET, freq, &mut frames)
+            }
         }
         .map_err(LidarCmdError::Encode)?;
         out.extend_from_slice(&frames[..n]);
+        if options.format == Format::Ydlidar {
+            prev = Some(rev.clone());
+        }
         report.revolutions += 1;
         progress(k + 1);
     }
@@ -236,7 +252,85 @@ pub fn encode_scans<const N: usize>(
     Ok((out, report))
 }
 
-/// One of the three decoders.
+/// Samples per YDLIDAR cloud packet written by the encoder (an X4 sends up to 40).
+pub const YDLIDAR_PER_PACKET: usize = 40;
+
+/// Largest miss, degrees, between where a YDLIDAR sample's corrected angle lands and the beam whose
+/// range it carries (below half the 1° step, so the assembler bins it on that beam).
+pub const YDLIDAR_MAX_MISS_DEG: f64 = 0.495;
+
+/// What a triangulation YDLIDAR measures at rotor angles 0°, 1°, … 359° (clockwise) when the
+/// world is the revolution `rev` (`rev[a]`: the range at clockwise bearing `a`°, NaN for none).
+///
+/// The decoder moves a sample of distance `d` from its rotor angle `k` to `k + c(d)`
+/// ([`ydlidar::angle_correction_deg`]: about −7° from 0.5 m on). So the sample at rotor angle `k`
+/// carries the range of the bearing `a` whose `a − c(r_a)` is nearest `k`, when that lands within
+/// [`YDLIDAR_MAX_MISS_DEG`] of `a` (the corrected angle falls in `a`'s beam); otherwise it reads
+/// "no measurement". Some bearings are then carried by no rotor angle, some by two: as with the
+/// real sensor, whose corrected points do not fall on a uniform grid.
+///
+/// The first rotor angles see bearings just short of 360°: their corrected points arrive before
+/// the assembler's 0° crossing, so they belong with the previous revolution and carry `prev`'s
+/// ranges ("no measurement" without one); a sample is only sent when its corrected angle falls on
+/// the same side of 0° as its bearing, never past 360°, and the samples before 0° only in an
+/// unbroken run from rotor angle 0° (any other point, even an empty one read at its rotor angle,
+/// is the assembler's 0° crossing). Decoded on the assembler, revolution
+/// `r` then comes back whole as scan `r`.
+pub fn ydlidar_rotor_samples(prev: Option<&[f32]>, rev: &[f32]) -> Vec<u16> {
+    let n = rev.len() as i64;
+    let quarter_mm = |r: &[f32]| -> Vec<u16> {
+        r.iter()
+            .map(|&x| ydlidar::distance_q2_from_range_m(x))
+            .collect()
+    };
+    let q2 = quarter_mm(rev);
+    let q2_prev = prev.map_or_else(|| vec![0; rev.len()], quarter_mm);
+    let corr = |q: u16| {
+        let d = f64::from(q) / 4.0;
+        (21.8 * (155.3 - d) / (155.3 * d)).atan().to_degrees()
+    };
+    let mut before_zero = true;
+    (0..n)
+        .map(|k| {
+            // (miss, sample, lands before 0°)
+            let mut best = (f64::INFINITY, 0u16, false);
+            for off in -30..=30i64 {
+                let a = k + off;
+                let q = if a < 0 {
+                    q2_prev.get((a + n) as usize).copied().unwrap_or(0)
+                } else {
+                    q2.get(a as usize).copied().unwrap_or(0)
+                };
+                if q == 0 {
+                    continue;
+                }
+                let landed = k as f64 + corr(q);
+                // Before 0° (previous revolution) exactly when the bearing is; never past 360°.
+                if (landed < 0.0) != (a < 0) || landed >= n as f64 {
+                    continue;
+                }
+                let miss = (landed - a as f64).abs();
+                if miss < best.0 {
+                    best = (miss, q, a < 0);
+                }
+            }
+            let (miss, q, before) = best;
+            // The assembler closes the revolution at the first point past 0° (an empty sample
+            // reads at its rotor angle, k ≥ 0°): points before 0° must come first, in one run.
+            let send = miss <= YDLIDAR_MAX_MISS_DEG && (before_zero || !before);
+            if !(send && before) {
+                before_zero = false;
+            }
+            if send {
+                q
+            } else {
+                0
+            }
+        })
+        .collect()
+}
+
+/// One of the four decoders.
 #[derive(Clone, Debug)]
 pub enum AnyDecoder {
     /// LD06 family.
@@ -245,6 +339,8 @@ pub enum AnyDecoder {
     Rplidar(RplidarDecoder),
     /// XV-11.
     Xv11(Xv11Decoder),
+    /// YDLIDAR, triangulation angle correction (boxed: it holds a 520-byte packet buffer).
+    Ydlidar(Box<YdlidarDecoder>),
 }
 
 impl AnyDecoder {
@@ -254,6 +350,7 @@ impl AnyDecoder {
             Format::Ld06 => Self::Ld06(Ld06Decoder::new()),
             Format::Rplidar => Self::Rplidar(RplidarDecoder::new()),
             Format::Xv11 => Self::Xv11(Xv11Decoder::new()),
+            Format::Ydlidar => Self::Ydlidar(Box::new(YdlidarDecoder::new())),
         }
     }
 
@@ -263,6 +360,15 @@ impl AnyDecoder {
             Self::Ld06(d) => d.feed(bytes, on_point),
             Self::Rplidar(d) => d.feed(bytes, on_point),
             Self::Xv11(d) => d.feed(bytes, on_point),
+            Self::Ydlidar(d) => d.feed(bytes, on_point),
+        }
+    }
+
+    /// The end of a recording: hands out what a decoder holds back (the YDLIDAR decoder's last
+    /// packet, which waits for the next packet's header); nothing for the others.
+    pub fn finish(&mut self, on_point: impl FnMut(LidarPoint)) {
+        if let Self::Ydlidar(d) = self {
+            d.flush(on_point);
         }
     }
 
@@ -272,6 +378,7 @@ impl AnyDecoder {
             Self::Ld06(d) => d.stats(),
             Self::Rplidar(d) => d.stats(),
             Self::Xv11(d) => d.stats(),
+            Self::Ydlidar(d) => d.stats(),
         }
     }
 }
@@ -304,12 +411,14 @@ pub fn decode_stream<const N: usize>(
     let mut assembler = ScanAssembler::new(layout, config).map_err(LidarCmdError::Assembler)?;
     let mut scans = Vec::new();
     let mut revolutions = Vec::new();
-    decoder.feed(bytes, |p| {
+    let mut on_point = |p| {
         if assembler.push(p).is_some() {
             scans.push(assembler.scan().ranges_m().to_vec());
             revolutions.push(assembler.revolution());
         }
-    });
+    };
+    decoder.feed(bytes, &mut on_point);
+    decoder.finish(&mut on_point);
     if assembler.finish().is_some() {
         scans.push(assembler.scan().ranges_m().to_vec());
         revolutions.push(assembler.revolution());
@@ -363,8 +472,10 @@ pub enum LidarCommand {
     /// Each FLASER scan (beam i at −90° + i·180°/n, counter-clockwise) becomes one clockwise
     /// revolution of 360 points 1° apart; angles the scan does not cover read "no measurement",
     /// and so do ranges the protocol's distance field cannot carry (the Intel log's 81.83 m
-    /// max-range value, anything past 16.38 m for RPLIDAR and XV-11). Timestamps (LD06) and the
-    /// speed field follow --rpm. See docs/lidar.md.
+    /// max-range value, anything past 16.38 m for RPLIDAR, XV-11 and YDLIDAR). Timestamps (LD06)
+    /// and the speed field follow --rpm. YDLIDAR samples are taken at the rotor angles whose
+    /// distance-corrected angle lands on a beam (the decoder applies the X4's triangulation
+    /// correction), so a few beams per scan come back empty. See docs/lidar.md.
     Encode(EncodeArgs),
     /// Decode a LiDAR byte stream into scans and report the decoder's and the assembler's
     /// counters; optionally draw one scan as a polar plot.

@@ -96,6 +96,63 @@ fn encode_then_decode_gives_the_logged_ranges_back() {
     }
 }
 
+/// YDLIDAR through the binary: the decoder applies the triangulation angle correction, so a beam
+/// no rotor angle's corrected point lands on comes back empty (docs/lidar.md); every range that
+/// comes back is the logged one to the quarter millimetre.
+#[test]
+fn ydlidar_encode_then_decode_gives_logged_ranges_or_nothing() {
+    let want = logged_scans(25);
+    let stream = tmp("ydlidar.bin");
+    let enc = common::run_json(common::bin().args([
+        "--json",
+        "lidar",
+        "encode",
+        "--log",
+        &intel(),
+        "--format",
+        "ydlidar",
+        "--scans",
+        "25",
+        "--garbage",
+        "40",
+        "-o",
+        &stream,
+    ]));
+    assert_eq!(enc["revolutions"], 25);
+    let dec = common::run_json(common::bin().args([
+        "--json", "lidar", "decode", "--format", "ydlidar", "--layout", "carmen", "--ranges",
+        &stream,
+    ]));
+    assert_eq!(dec["decoder"]["skipped_bytes"], 40);
+    assert_eq!(dec["decoder"]["bad_checksum"], 0);
+    // A zero packet and nine packets of up to 40 samples per revolution.
+    assert_eq!(dec["decoder"]["frames_ok"], 250);
+    let scans = dec["scans"].as_array().unwrap();
+    assert_eq!(scans.len(), 25);
+    let (res, max) = (0.25e-3, 16.38375);
+    let (mut back, mut empty) = (0usize, 0usize);
+    for (k, (s, w)) in scans.iter().zip(&want).enumerate() {
+        let got = s["ranges_m"].as_array().unwrap();
+        assert_eq!(got.len(), w.len());
+        for (i, (g, &w)) in got.iter().zip(w).enumerate() {
+            let carried = w >= res / 2.0 && w < max + res / 2.0;
+            match g.as_f64() {
+                Some(g) => {
+                    assert!(carried, "scan {k} beam {i}: {g} for {w}");
+                    assert!(
+                        (g - w).abs() <= res / 2.0 + 1e-6 * w,
+                        "scan {k} beam {i}: {g} vs {w}"
+                    );
+                    back += 1;
+                }
+                None if carried => empty += 1,
+                None => {}
+            }
+        }
+    }
+    assert!(empty * 20 < back, "{empty} empty, {back} back");
+}
+
 #[test]
 fn corrupted_stream_is_counted_not_trusted() {
     let stream = tmp("bad.bin");

@@ -31,7 +31,7 @@ const QEMU_TIMEOUT_S: &str = "120";
 const INSNS_BEAMS: u64 = 360;
 /// What each measured region of `insns.rs` does, in order, and what its count is divided by
 /// (the program prints the divisors on its `insns divisors:` line).
-const INSNS_REGIONS: [(&str, &str); 17] = [
+const INSNS_REGIONS: [(&str, &str); 18] = [
     ("empty loop (sum of ranges)", "beam"),
     ("ln per beam (math::ln)", "beam"),
     ("exp per beam (math::exp)", "beam"),
@@ -52,6 +52,7 @@ const INSNS_REGIONS: [(&str, &str); 17] = [
     ("LD06 decode + assembly", "byte"),
     ("RPLIDAR decode + assembly", "byte"),
     ("XV-11 decode + assembly", "byte"),
+    ("YDLIDAR decode + assembly", "byte"),
 ];
 
 type Result<T = ()> = std::result::Result<T, String>;
@@ -563,7 +564,7 @@ fn insns(machine: &str) -> Result {
     }
     let per_beam = |n: u64| n as f64 / INSNS_BEAMS as f64;
     println!(
-        "\ninstructions on {machine} ({FIRMWARE_TARGET}, release); regions 0-3: {INSNS_BEAMS} synthetic beams; 4-9: Intel map and real scans; 10-11: the same map tiled; 12-16: LiDAR streams of the real scans:"
+        "\ninstructions on {machine} ({FIRMWARE_TARGET}, release); regions 0-3: {INSNS_BEAMS} synthetic beams; 4-9: Intel map and real scans; 10-11: the same map tiled; 12-17: LiDAR streams of the real scans:"
     );
     println!(
         "{:<3} {:<34} {:>12} {:>10} {:>10} per",
@@ -612,13 +613,14 @@ fn insns(machine: &str) -> Result {
         per_beam(mixture)
     );
     println!(
-        "LiDAR streams, instructions per received byte: LD06 decode {:.1}, LD06 decode + assembly {:.1} ({:.1}x the empty byte loop of {:.1}), RPLIDAR {:.1}, XV-11 {:.1}",
+        "LiDAR streams, instructions per received byte: LD06 decode {:.1}, LD06 decode + assembly {:.1} ({:.1}x the empty byte loop of {:.1}), RPLIDAR {:.1}, XV-11 {:.1}, YDLIDAR {:.1}",
         per(13),
         per(14),
         per(14) / per(12),
         per(12),
         per(15),
-        per(16)
+        per(16),
+        per(17)
     );
     Ok(())
 }

@@ -36,7 +36,8 @@
 //! 13. `Ld06Decoder::feed` alone (CRC, 12 points per frame handed to a closure);
 //! 14. LD06 decode plus `ScanAssembler::push` of every point (the firmware's sensor path);
 //! 15. RPLIDAR decode plus assembly;
-//! 16. XV-11 decode plus assembly.
+//! 16. XV-11 decode plus assembly;
+//! 17. YDLIDAR decode (triangulation angle correction) plus assembly.
 //!
 //! The last line printed gives each region's divisor (`insns divisors: …`), which
 //! `cargo xtask insns` reads.
@@ -139,10 +140,10 @@ where
     Some((scans, asm.stats().accepted))
 }
 
-/// Regions 12–16: the LiDAR decoders and the assembler, per received byte. Returns the bytes of
-/// the three streams, or `None` if an encoder or the layout was rejected. Not inlined.
+/// Regions 12–17: the LiDAR decoders and the assembler, per received byte. Returns the bytes of
+/// the four streams, or `None` if an encoder or the layout was rejected. Not inlined.
 #[inline(never)]
-fn lidar_regions() -> Option<[usize; 3]> {
+fn lidar_regions() -> Option<[usize; 4]> {
     use beamfield::lidar::assembler::sample_revolution;
     use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
     use beamfield::lidar::rplidar::{self, RplidarDecoder};
@@ -219,9 +220,24 @@ fn lidar_regions() -> Option<[usize; 3]> {
     let (xv_scans, xv_accepted) =
         decode_assemble_region::<Xv11Decoder, _>(stream, &layout, config)?;
 
+    // YDLIDAR (region 17): a zero packet and packets of 40 samples per revolution, at uniform
+    // rotor angles; the decoder applies the X4's triangulation correction (an `atanf` per
+    // measured sample), so the points land about 7° before their rotor angle.
+    let mut n = 0;
+    for rev in &revs {
+        let q2 = rev.map(beamfield::lidar::ydlidar::distance_q2_from_range_m);
+        n += beamfield::lidar::ydlidar::encode_revolution(&q2, 40, 100, buf.get_mut(n..)?).ok()?;
+    }
+    let yd_len = n;
+    let stream = black_box(buf.get(..n)?);
+    let (yd_scans, yd_accepted) = decode_assemble_region::<
+        beamfield::lidar::ydlidar::YdlidarDecoder,
+        _,
+    >(stream, &layout, config)?;
+
     println!(
-        "insns: lidar: {} real scans as revolutions of {} points; byte sum {}; ld06 {} bytes, {} points, {} scans, {} ranges binned; rplidar {} bytes, {} scans, {} binned; xv11 {} bytes, {} scans, {} binned",
-        REVS, POINTS, sum, ld06_len, pts, ld06_scans, ld06_accepted, rp_len, rp_scans, rp_accepted, xv_len, xv_scans, xv_accepted
+        "insns: lidar: {} real scans as revolutions of {} points; byte sum {}; ld06 {} bytes, {} points, {} scans, {} ranges binned; rplidar {} bytes, {} scans, {} binned; xv11 {} bytes, {} scans, {} binned; ydlidar {} bytes, {} scans, {} binned",
+        REVS, POINTS, sum, ld06_len, pts, ld06_scans, ld06_accepted, rp_len, rp_scans, rp_accepted, xv_len, xv_scans, xv_accepted, yd_len, yd_scans, yd_accepted
     );
     // Every revolution but the last (no wrap after it) is emitted, and every range a protocol's
     // distance field carries (counted here from the samples) was binned.
@@ -235,8 +251,14 @@ fn lidar_regions() -> Option<[usize; 3]> {
         && [ld06_scans, rp_scans, xv_scans] == [REVS as u32 - 1; 3]
         && ld06_accepted == carried(1000.0, 65_535.0)
         && rp_accepted == carried(4000.0, 65_535.0)
-        && xv_accepted == carried(1000.0, 16_383.0);
-    ok.then_some([ld06_len, rp_len, xv_len])
+        && xv_accepted == carried(1000.0, 16_383.0)
+        // YDLIDAR: the corrected points cross 0° about 7° into each revolution (so the first,
+        // partial one is emitted too), and the last packet waits for a header that never comes;
+        // every carried range is binned or lands on an already filled beam, at most.
+        && (REVS as u32 - 1..=REVS as u32).contains(&yd_scans)
+        && yd_accepted > 0
+        && yd_accepted <= carried(4000.0, 65_535.0);
+    ok.then_some([ld06_len, rp_len, xv_len, yd_len])
 }
 
 /// Region 9's beam model: the intrinsics fitted on the Intel log (the scans and the blob are
@@ -531,15 +553,15 @@ fn main() -> ! {
         if tiled_ok { "bit for bit the raw blob's" } else { "DIFFERS from the raw blob's" },
         Fixed::new(f64::from(tiled_overhead), 1)
     );
-    // Regions 12–16: the LiDAR stream decoders.
-    let Some([ld06_len, rp_len, xv_len]) = lidar_regions() else {
-        println!("insns: regions 12-16: a LiDAR encoder, layout or decoded count was wrong");
+    // Regions 12–17: the LiDAR stream decoders.
+    let Some([ld06_len, rp_len, xv_len, yd_len]) = lidar_regions() else {
+        println!("insns: regions 12-17: a LiDAR encoder, layout or decoded count was wrong");
         exit(false)
     };
     // Divisors of each region for `cargo xtask insns`: beams, beam slots, beam evaluations,
     // poses, bytes.
     println!(
-        "insns divisors: {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {}",
+        "insns divisors: {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {}",
         BEAMS,
         BEAMS,
         BEAMS,
@@ -556,7 +578,8 @@ fn main() -> ! {
         ld06_len,
         ld06_len,
         rp_len,
-        xv_len
+        xv_len,
+        yd_len
     );
     exit(
         score.log_likelihood.is_finite()
