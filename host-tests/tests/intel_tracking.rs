@@ -49,6 +49,7 @@ fn tracks_the_whole_intel_log() {
             weighting: Weighting::Product,
             recovery: (0.0, 0.0),
             recovery_while_unsettled: false,
+            retry: None,
             resample_ess: 0.5,
             scans: input.scans.len(),
         };
