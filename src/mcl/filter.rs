@@ -342,26 +342,29 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if n == 0 {
             return Err(MclError::NotInitialized);
         }
-        let Some(mut rw) = self.reweight(&mut log_likelihood) else {
-            self.reset_weights_only();
-            return Err(MclError::AllImpossible);
-        };
-        // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added, so the normalizer's
-        // total is the average likelihood itself.
-        let ln_avg = rw.ln_total;
+        // At most two weighings (the second after a retry), from one call site so that the
+        // score is inlined once.
+        let mut first_ln_avg = None;
         let mut retried = false;
-        if self.config.retry() && self.collapsed(ln_avg * recovery_scale) {
-            self.resample(0, rw.sum, None, rng);
-            self.spread(rng);
-            rw = match self.reweight(&mut log_likelihood) {
-                Some(again) => again,
-                None => {
-                    self.reset_weights_only();
-                    return Err(MclError::AllImpossible);
-                }
+        let rw = loop {
+            let Some(rw) = self.reweight(&mut log_likelihood) else {
+                self.reset_weights_only();
+                return Err(MclError::AllImpossible);
             };
-            retried = true;
-        }
+            if first_ln_avg.is_none() {
+                // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added, so the
+                // normalizer's total is the average likelihood itself.
+                first_ln_avg = Some(rw.ln_total);
+                if self.config.retry() && self.collapsed(rw.ln_total * recovery_scale) {
+                    self.resample(0, rw.sum, None, rng);
+                    self.spread(rng);
+                    retried = true;
+                    continue;
+                }
+            }
+            break rw;
+        };
+        let ln_avg = first_ln_avg.unwrap_or(rw.ln_total);
         let random_fraction = self.track_likelihood(ln_avg * recovery_scale);
         self.estimate = rw.estimate;
         let u = uniform_f32(rng);
