@@ -131,7 +131,7 @@ impl MclConfig {
     /// resamples the set by those weights, moves every particle by a further normal step with
     /// `scale` times the last odometry step's spread, and weighs the set again by the same scan
     /// (one more scoring pass, at those updates only). `drop_nats = −∞` retries at every update
-    /// (but the first, and those after a zero step); `+∞` turns the retry off.
+    /// (but the first, which sets the level, and those after a zero step or none); `+∞` turns the retry off.
     ///
     /// On the Intel lab log a scale below 1 works best (a local refinement of the cloud around
     /// the particles the scan favoured); a scale above 1 (re-searching a wider region) loses the

@@ -456,9 +456,6 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// The retry's test ([`MclConfig::with_retry`]): is `ln_avg` more than the threshold below
     /// the level? Then moves the level towards `ln_avg`. Never after a zero step.
     fn collapsed(&mut self, ln_avg: f32) -> bool {
-        if self.retry_sigma_xy_m == 0.0 && self.retry_sigma_theta_rad == 0.0 {
-            return false;
-        }
         let level = self.ln_level;
         if level == f32::NEG_INFINITY {
             self.ln_level = ln_avg;
@@ -468,7 +465,8 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if ln_avg.is_finite() {
             self.ln_level = level + RETRY_LEVEL_RATE * (ln_avg - level);
         }
-        collapsed
+        let moved = self.retry_sigma_xy_m > 0.0 || self.retry_sigma_theta_rad > 0.0;
+        collapsed && moved
     }
 
     /// Moves every particle by a normal step, σ the last odometry step's spread (σ_xy the
