@@ -122,6 +122,44 @@ proptest! {
     }
 
     #[test]
+    fn any_scores_keep_the_set_finite_with_the_retry(
+        scores in prop::collection::vec(any_f32(), N),
+        seed in any::<u64>(),
+        rounds in 1usize..4,
+        scale in prop_oneof![Just(0.3f32), Just(1.0f32), Just(1e3f32)],
+    ) {
+        // The retry at every update (after the first): every score is used twice per update.
+        let (_, fs) = room();
+        let free = FreeSpace::parse(&fs).unwrap();
+        let mut store = Particles::<N>::new();
+        let c = config().with_retry(f32::NEG_INFINITY, scale).unwrap();
+        let mut f = Mcl::new(&mut store, c).unwrap();
+        let mut rng = SplitMix64::new(seed);
+        f.init_uniform(N, &free, &mut rng).unwrap();
+        let step = OdometryStep::new(0.1, 0.5, -0.1).unwrap();
+        let all_impossible = scores.iter().all(|s| s.is_nan() || *s == f32::NEG_INFINITY);
+        for _ in 0..rounds {
+            f.predict(&step, &mut rng);
+            let mut i = 0;
+            let r = f.update_with(
+                |_| {
+                    let s = scores[i % N];
+                    i += 1;
+                    s
+                },
+                Some(&free),
+                &mut rng,
+            );
+            if all_impossible {
+                prop_assert_eq!(r.err(), Some(MclError::AllImpossible));
+            } else {
+                prop_assert!(r.is_ok());
+            }
+            healthy(&f);
+        }
+    }
+
+    #[test]
     fn empty_and_invalid_scans_are_skipped(ranges in prop::collection::vec(prop_oneof![Just(f32::NAN), -10f32..-0.001], 0..30), seed in any::<u64>()) {
         let (blob, fs) = room();
         let free = FreeSpace::parse(&fs).unwrap();

@@ -81,6 +81,10 @@ pub struct MclConfig {
     pub(super) resample_ess_fraction: f32,
     pub(super) recovery_alpha_slow: f32,
     pub(super) recovery_alpha_fast: f32,
+    /// Retry threshold, nats (per scored beam for prepared scans); `+∞` is off.
+    pub(super) retry_drop_nats: f32,
+    /// Retry scale of the last odometry step's spread.
+    pub(super) retry_scale: f32,
 }
 
 impl MclConfig {
@@ -115,7 +119,40 @@ impl MclConfig {
             resample_ess_fraction,
             recovery_alpha_slow,
             recovery_alpha_fast,
+            retry_drop_nats: f32::INFINITY,
+            retry_scale: 1.0,
         })
+    }
+
+    /// Turns on the retry (off by default): a second proposal within an update. When an
+    /// update's average likelihood (`ln w_avg`, per scored beam as for recovery, see
+    /// [`Mcl`](super::Mcl)) falls more than `drop_nats` below its recent level (an exponential
+    /// average of the earlier updates' values, rate [`RETRY_LEVEL_RATE`]), the update
+    /// resamples the set by those weights, moves every particle by a further normal step with
+    /// `scale` times the last odometry step's spread, and weighs the set again by the same scan
+    /// (one more scoring pass, at those updates only). `drop_nats = −∞` retries at every update
+    /// (but the first, which sets the level, and those after a zero step or none); `+∞` turns the retry off.
+    ///
+    /// On the Intel lab log a scale below 1 works best (a local refinement of the cloud around
+    /// the particles the scan favoured); a scale above 1 (re-searching a wider region) loses the
+    /// robot more often. See `docs/localization.md`.
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] for a NaN `drop_nats` or a `scale` not finite and positive.
+    pub fn with_retry(self, drop_nats: f32, scale: f32) -> Result<Self, MclError> {
+        if drop_nats.is_nan() || !(scale.is_finite() && scale > 0.0) {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self {
+            retry_drop_nats: drop_nats,
+            retry_scale: scale,
+            ..self
+        })
+    }
+
+    /// True when the retry is on ([`MclConfig::with_retry`]).
+    pub fn retry(&self) -> bool {
+        self.retry_drop_nats < f32::INFINITY
     }
 
     /// The motion model.
@@ -128,6 +165,10 @@ impl MclConfig {
         self.recovery_alpha_fast > 0.0
     }
 }
+
+/// The rate of the exponential average of `ln w_avg` that the retry compares each
+/// update with ([`MclConfig::with_retry`]).
+pub const RETRY_LEVEL_RATE: f32 = 0.1;
 
 /// What one measurement update did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -145,4 +186,7 @@ pub struct Update {
     pub resampled: bool,
     /// Random particles drawn from free space at this resampling.
     pub injected: u16,
+    /// True when the retry ([`MclConfig::with_retry`]) moved and reweighted the set
+    /// at this update (`ln_avg_likelihood` is the first weighing's).
+    pub retried: bool,
 }

@@ -1,7 +1,7 @@
 //! The particle filter: Monte Carlo localization (Thrun Table 8.2) with augmented-MCL recovery
 //! (Table 8.3), on caller-placed storage.
 
-use super::config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES};
+use super::config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
 use super::estimate::{Estimate, Moments};
 use super::fast::exp_nonpositive;
 use super::motion::{sample_words, OdometryStep};
@@ -61,6 +61,12 @@ pub struct Mcl<'p, const N: usize> {
     ln_w_slow: f32,
     ln_w_fast: f32,
     estimate: Estimate,
+    /// The retry's level: an exponential average of the scaled `ln w_avg` (`−∞`
+    /// before the first update).
+    ln_level: f32,
+    /// The last odometry step's spread for the retry: σ in x and y (metres) and in heading.
+    retry_sigma_xy_m: f32,
+    retry_sigma_theta_rad: f32,
 }
 
 impl<'p, const N: usize> Mcl<'p, N> {
@@ -84,6 +90,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             ln_w_slow: f32::NEG_INFINITY,
             ln_w_fast: f32::NEG_INFINITY,
             estimate: Estimate::default(),
+            ln_level: f32::NEG_INFINITY,
+            retry_sigma_xy_m: 0.0,
+            retry_sigma_theta_rad: 0.0,
         })
     }
 
@@ -108,6 +117,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.uniform = true;
         self.ln_w_slow = f32::NEG_INFINITY;
         self.ln_w_fast = f32::NEG_INFINITY;
+        self.ln_level = f32::NEG_INFINITY;
         self.estimate = Estimate::of(self.poses(), self.weights());
     }
 
@@ -209,9 +219,16 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// in particle order.
     pub fn predict<R: Rng + ?Sized>(&mut self, step: &OdometryStep, rng: &mut R) {
         if *step == OdometryStep::STILL {
+            self.retry_sigma_xy_m = 0.0;
+            self.retry_sigma_theta_rad = 0.0;
             return;
         }
         let sigmas = self.config.noise.sigmas(step);
+        if self.config.retry() {
+            let (s_rot1, s_trans, s_rot2) = sigmas;
+            self.retry_sigma_xy_m = s_trans.max(step.trans_m() * s_rot1);
+            self.retry_sigma_theta_rad = math::sqrt(s_rot1 * s_rot1 + s_rot2 * s_rot2);
+        }
         let mut spare: Option<u32> = None;
         for p in self.store.poses.iter_mut().take(self.len) {
             let pair = rng.next_u64();
@@ -325,13 +342,29 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if n == 0 {
             return Err(MclError::NotInitialized);
         }
-        let Some(rw) = self.reweight(&mut log_likelihood) else {
-            self.reset_weights_only();
-            return Err(MclError::AllImpossible);
+        // At most two weighings (the second after a retry), from one call site so that the
+        // score is inlined once.
+        let mut first_ln_avg = None;
+        let mut retried = false;
+        let rw = loop {
+            let Some(rw) = self.reweight(&mut log_likelihood) else {
+                self.reset_weights_only();
+                return Err(MclError::AllImpossible);
+            };
+            if first_ln_avg.is_none() {
+                // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added, so the
+                // normalizer's total is the average likelihood itself.
+                first_ln_avg = Some(rw.ln_total);
+                if self.config.retry() && self.collapsed(rw.ln_total * recovery_scale) {
+                    self.resample(0, rw.sum, None, rng);
+                    self.spread(rng);
+                    retried = true;
+                    continue;
+                }
+            }
+            break rw;
         };
-        // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added, so the normalizer's
-        // total is the average likelihood itself.
-        let ln_avg = rw.ln_total;
+        let ln_avg = first_ln_avg.unwrap_or(rw.ln_total);
         let random_fraction = self.track_likelihood(ln_avg * recovery_scale);
         self.estimate = rw.estimate;
         let u = uniform_f32(rng);
@@ -358,6 +391,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             random_fraction,
             resampled: due,
             injected,
+            retried,
         })
     }
 
@@ -417,6 +451,39 @@ impl<'p, const N: usize> Mcl<'p, N> {
             .take(self.len)
             .for_each(|x| *x = w);
         self.uniform = true;
+    }
+
+    /// The retry's test ([`MclConfig::with_retry`]): is `ln_avg` more than the threshold below
+    /// the level? Then moves the level towards `ln_avg`. Never after a zero step.
+    fn collapsed(&mut self, ln_avg: f32) -> bool {
+        let level = self.ln_level;
+        if level == f32::NEG_INFINITY {
+            self.ln_level = ln_avg;
+            return false;
+        }
+        let collapsed = ln_avg < level - self.config.retry_drop_nats;
+        if ln_avg.is_finite() {
+            self.ln_level = level + RETRY_LEVEL_RATE * (ln_avg - level);
+        }
+        let moved = self.retry_sigma_xy_m > 0.0 || self.retry_sigma_theta_rad > 0.0;
+        collapsed && moved
+    }
+
+    /// Moves every particle by a normal step, σ the last odometry step's spread (σ_xy the
+    /// larger of σ_trans and δtrans·σ_rot1, σ_θ = √(σ_rot1² + σ_rot2²)) times the retry scale:
+    /// the retry's second proposal. Two [`standard_normal_pair`]s per particle.
+    fn spread<R: Rng + ?Sized>(&mut self, rng: &mut R) {
+        let k = self.config.retry_scale;
+        let (s_xy, s_theta) = (k * self.retry_sigma_xy_m, k * self.retry_sigma_theta_rad);
+        for p in self.store.poses.iter_mut().take(self.len) {
+            let (a, b) = standard_normal_pair(rng);
+            let (c, _) = standard_normal_pair(rng);
+            *p = Pose {
+                x_m: p.x_m + s_xy * a,
+                y_m: p.y_m + s_xy * b,
+                theta_rad: wrap_angle(p.theta_rad + s_theta * c),
+            };
+        }
     }
 
     /// Table 8.3's averages, in log space; returns `max(0, 1 − w_fast/w_slow)`.
@@ -621,5 +688,75 @@ mod tests {
             "{e:?} vs {truth:?}"
         );
         assert!(e.theta_rad.abs() < 0.03, "{e:?}");
+    }
+
+    #[test]
+    fn retry_config_is_validated() {
+        let c = config();
+        assert!(!c.retry());
+        assert!(c.with_retry(0.1, 0.5).unwrap().retry());
+        assert!(c.with_retry(f32::NEG_INFINITY, 2.0).unwrap().retry());
+        assert!(!c.with_retry(f32::INFINITY, 1.0).unwrap().retry());
+        for (d, k) in [
+            (f32::NAN, 1.0),
+            (0.1, 0.0),
+            (0.1, -1.0),
+            (0.1, f32::INFINITY),
+        ] {
+            assert_eq!(
+                c.with_retry(d, k).err(),
+                Some(MclError::BadConfig),
+                "{d} {k}"
+            );
+        }
+    }
+
+    /// Runs 12 updates of a cloud driven 0.5 m per step along +x, scored by a narrow
+    /// Gaussian around `truth`; at update 8 the truth is 0.3 m off the odometry (the prediction
+    /// misses it). Returns the updates' `retried` flags and the final estimate's x error.
+    fn drive(config: MclConfig) -> (Vec<bool>, f32) {
+        let mut store = Particles::<300>::new();
+        let mut f = Mcl::new(&mut store, config).unwrap();
+        let mut rng = SplitMix64::new(7);
+        f.init_gaussian(300, &Pose::default(), 0.02, 0.01, &mut rng)
+            .unwrap();
+        let step = OdometryStep::new(0.0, 0.5, 0.0).unwrap();
+        let mut truth = Pose::default();
+        let mut retried = Vec::new();
+        for k in 0..12 {
+            truth = step.apply(&truth);
+            if k == 8 {
+                truth.y_m += 0.3;
+            }
+            f.predict(&step, &mut rng);
+            let t = truth;
+            let up = f
+                .update_with(
+                    |p| -((p.x_m - t.x_m).powi(2) + (p.y_m - t.y_m).powi(2)) / (2.0 * 0.03 * 0.03),
+                    None,
+                    &mut rng,
+                )
+                .unwrap();
+            assert!(f.poses().iter().all(Pose::is_finite));
+            retried.push(up.retried);
+        }
+        (retried, (f.estimate().pose.y_m - truth.y_m).abs())
+    }
+
+    #[test]
+    fn retry_fires_when_the_likelihood_collapses() {
+        // σ of the step: α = 0.02 gives σ_trans = √(0.02·0.25) ≈ 7 cm, so the 0.3 m jump
+        // drops the average log-likelihood by tens of nats at update 8 and nowhere else.
+        let noise = OdometryNoise::uniform(0.02).unwrap();
+        let base = MclConfig::new(noise, 0.5, 0.0, 0.0).unwrap();
+        let (off, _) = drive(base);
+        assert!(off.iter().all(|&r| !r));
+        let (on, err) = drive(base.with_retry(5.0, 3.0).unwrap());
+        assert!(on[8], "{on:?}");
+        assert_eq!(on.iter().filter(|&&r| r).count(), 1, "{on:?}");
+        assert!(err < 0.1, "{err}");
+        // −∞: every update but the first.
+        let (every, _) = drive(base.with_retry(f32::NEG_INFINITY, 0.5).unwrap());
+        assert!(!every[0] && every[1..].iter().all(|&r| r), "{every:?}");
     }
 }

@@ -26,7 +26,7 @@ pub mod normal;
 pub mod resample;
 pub mod rng;
 
-pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES};
+pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
 pub use estimate::Estimate;
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
 pub use motion::{MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M};

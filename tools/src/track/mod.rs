@@ -112,6 +112,12 @@ pub struct TrackArgs {
     /// A guard against recovery hijacking a tracked cloud.
     #[arg(long = "recovery-while-unsettled")]
     pub recovery_while_unsettled: bool,
+    /// Retry "DROP,SCALE" (off by default; MclConfig::with_retry): when an update's average
+    /// likelihood per beam falls more than DROP nats below its recent level, resample, move the
+    /// set by SCALE times the odometry step's spread and weigh it again by the same scan. DROP
+    /// "-inf" retries at every update (a second scoring pass each time), e.g. "--retry=-inf,0.5".
+    #[arg(long, allow_hyphen_values = true)]
+    pub retry: Option<String>,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -201,6 +207,13 @@ fn parse_list(text: &str, what: &str, n: usize) -> Result<Vec<f32>, TrackError> 
 pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, TrackError> {
     let a = parse_list(&args.odom_noise, "--odom-noise", 4)?;
     let r = parse_list(&args.recovery, "--recovery", 2)?;
+    let retry = match &args.retry {
+        Some(text) => {
+            let v = parse_list(text, "--retry", 2)?;
+            Some((v[0], v[1]))
+        }
+        None => None,
+    };
     Ok(RunOptions {
         particles: args.particles,
         kappa: args.kappa,
@@ -212,6 +225,7 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         weighting: args.weighting,
         recovery: (r[0], r[1]),
         recovery_while_unsettled: args.recovery_while_unsettled,
+        retry,
         resample_ess: args.resample_ess,
         scans: args.scans.unwrap_or(scans).min(scans),
     })
@@ -272,6 +286,10 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
     let maxe = pick(|m| m.max_trans_m);
     let within = pick(|m| m.within_10cm_2deg * 100.0);
     let lost = runs.iter().filter(|(_, m, _)| m.lost).count();
+    let lost_after = runs
+        .iter()
+        .filter(|(_, m, _)| m.lost_after_convergence)
+        .count();
     let conv: Vec<Option<usize>> = runs.iter().map(|(_, m, _)| m.converged_after).collect();
     let conv_ok: Vec<f64> = conv.iter().flatten().map(|&c| c as f64).collect();
     if json {
@@ -279,24 +297,25 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
             .iter()
             .map(|(seed, m, r)| {
                 serde_json::json!({ "seed": seed, "metrics": m, "skipped": r.skipped,
-                    "resamplings": r.resamplings, "injected": r.injected })
+                    "resamplings": r.resamplings, "injected": r.injected, "retries": r.retries })
             })
             .collect();
         return Ok(serde_json::json!({
             "scans": o.scans, "particles": o.particles, "kappa": o.kappa, "stride": o.stride,
             "odom_alphas": o.alphas, "init": format!("{:?}", o.init).to_lowercase(),
             "weighting": format!("{:?}", o.weighting), "recovery": [o.recovery.0, o.recovery.1],
-            "recovery_while_unsettled": o.recovery_while_unsettled, "kidnap": o.kidnap, "runs": per,
+"recovery_while_unsettled": o.recovery_while_unsettled,
+            "retry": o.retry.map(|(d, k)| [d, k]), "kidnap": o.kidnap, "runs": per,
             "trans_rmse_cm_min_med_max": rmse, "heading_rmse_deg_min_med_max": head,
             "max_trans_m_min_med_max": maxe, "within_10cm_2deg_pct_min_med_max": within,
-            "lost_runs": lost, "converged_runs": conv_ok.len(),
+            "lost_runs": lost, "lost_after_convergence_runs": lost_after, "converged_runs": conv_ok.len(),
             "converged_after_min_med_max": if conv_ok.is_empty() { None } else { Some(min_med_max(conv_ok.clone())) },
         })
         .to_string());
     }
     let mut s = format!(
         "{} scans, {} particles, κ {}, stride {}, odom_alpha {:?}, init {:?}, weighting {:?}, \
-         recovery {:?}{}{}\n",
+         recovery {:?}{}{}{}\n",
         o.scans,
         o.particles,
         o.kappa,
@@ -310,6 +329,9 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
         } else {
             ""
         },
+        o.retry
+            .map(|(d, k)| format!(", retry {d} nats below the level, {k}× the step's spread"))
+            .unwrap_or_default(),
         o.kidnap
             .map(|k| format!(", kidnapped at scan {k}"))
             .unwrap_or_default()
@@ -317,7 +339,7 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
     for (seed, m, r) in &runs {
         s += &format!(
             "seed {seed}: trans RMSE {:.2} cm, heading RMSE {:.2}°, max {:.3} m, within 10 cm/2° \
-             {:.1} %, {}{}; {} resamplings, {} injected, {} skipped\n",
+             {:.1} %, {}{}{}; {} resamplings, {} injected, {} retries, {} skipped\n",
             m.trans_rmse_m * 100.0,
             m.heading_rmse_deg,
             m.max_trans_m,
@@ -326,8 +348,14 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
             m.converged_after
                 .map(|c| format!(", converged after {c} scans"))
                 .unwrap_or_else(|| ", never converged".into()),
+            if m.lost_after_convergence {
+                ", LOST after converging"
+            } else {
+                ""
+            },
             r.resamplings,
             r.injected,
+            r.retries,
             r.skipped,
         );
     }
@@ -354,8 +382,12 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
         runs.len(),
     );
     if !conv_ok.is_empty() {
+        let conv_ok_runs = conv_ok.len();
         let c = min_med_max(conv_ok);
-        s += &format!(", after {:.0} / {:.0} / {:.0} scans", c[0], c[1], c[2]);
+        s += &format!(
+            ", after {:.0} / {:.0} / {:.0} scans; lost after converging in {lost_after} of {}",
+            c[0], c[1], c[2], conv_ok_runs
+        );
     }
     if let Some(p) = &args.output {
         s += &format!("\nwrote {}", p.display());

@@ -115,6 +115,8 @@ pub struct RunOptions {
     pub recovery: (f32, f32),
     /// Inject recovery particles only while the filter has not settled (see `Settled`).
     pub recovery_while_unsettled: bool,
+    /// The retry (drop in nats per beam, scale of the step's spread); None: off.
+    pub retry: Option<(f32, f32)>,
     /// ESS fraction below which the set is resampled.
     pub resample_ess: f32,
     /// Scans to run (at most the log's).
@@ -136,6 +138,8 @@ pub struct RunResult {
     pub resamplings: usize,
     /// Random particles injected by recovery, in total.
     pub injected: u64,
+    /// Updates at which the retry moved and reweighted the set.
+    pub retries: usize,
 }
 
 /// Summary figures of a run.
@@ -154,6 +158,9 @@ pub struct Metrics {
     /// First scan from which the estimate stays within 20 cm / 5° for 20 scans (counted from
     /// the start, or from the kidnapping).
     pub converged_after: Option<usize>,
+    /// The run converged and was later more than 0.5 m off (at a scan after the 20 that
+    /// made it converge).
+    pub lost_after_convergence: bool,
 }
 
 impl RunResult {
@@ -186,7 +193,14 @@ impl RunResult {
                 break;
             }
         }
+        let lost_after_convergence = converged_after.is_some_and(|c| {
+            self.trans_err_m
+                .iter()
+                .skip(from + c + CONVERGED_SCANS)
+                .any(|&e| e > LOST_M)
+        });
         Metrics {
+            lost_after_convergence,
             trans_rmse_m,
             heading_rmse_deg,
             max_trans_m,
@@ -304,6 +318,12 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         .map_err(|e| usage(format!("--odom-noise: {e}")))?;
     let config = MclConfig::new(noise, o.resample_ess, o.recovery.0, o.recovery.1)
         .map_err(|e| usage(format!("--recovery / --resample-ess: {e}")))?;
+    let config = match o.retry {
+        Some((drop, scale)) => config
+            .with_retry(drop, scale)
+            .map_err(|e| usage(format!("--retry: {e}")))?,
+        None => config,
+    };
     let lf = LikelihoodField::new(view, input.params);
     let model = Tempered::new(lf, o.kappa, o.stride)
         .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;
@@ -331,6 +351,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         skipped: 0,
         resamplings: 0,
         injected: 0,
+        retries: 0,
     };
     let progress = std::io::stderr().is_terminal();
     let odom = synthesize_odometry(&noise, input.logged.get(..n).unwrap_or(&[]), o.seed)?;
@@ -376,6 +397,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             Ok(u) => {
                 out.resamplings += usize::from(u.resampled);
                 out.injected += u64::from(u.injected);
+                out.retries += usize::from(u.retried);
                 settled.observe(&u.estimate, &seen);
                 u.estimate.pose
             }
