@@ -169,7 +169,9 @@ impl<'a> RayCaster<'a> {
     }
 
     /// A cell past encoding 1's slice: a tiled blob's cell, or `None` past the map. Out of
-    /// line, so the traversal's loop keeps only the raw read.
+    /// line, so the traversal's loop keeps only the raw read. Only with `tiled-field`: without
+    /// it a miss of the raw slice is past the map, and the traversal gives `None` in line.
+    #[cfg(feature = "tiled-field")]
     #[inline(never)]
     #[cold]
     fn code_slow(&self, idx: usize) -> Option<u8> {
@@ -563,9 +565,14 @@ impl Ray {
         } = self.walk;
         loop {
             // Encoding 1 reads the slice; a miss (past the map, or a tiled blob) asks the view,
-            // which gives `None` past the map in both encodings.
+            // which gives `None` past the map in both encodings. Without `tiled-field` a miss can
+            // only be past the map: `None` in line, no call in the loop (a call site there, even
+            // a cold one, costs the loop registers; docs/firmware.md).
             let code = match rc.codes.get(idx) {
                 Some(&c) => c,
+                #[cfg(not(feature = "tiled-field"))]
+                None => return Run::Done(None),
+                #[cfg(feature = "tiled-field")]
                 None => match rc.code_slow(idx) {
                     Some(c) => c,
                     None => return Run::Done(None),

@@ -1,6 +1,8 @@
 //! Fuzzes the LD06 decoder and the assembler behind it: fuzz bytes become LD06 frames with a
 //! correct CRC (so mutations reach the fields: angles, distances, timestamps), raw runs and cut
-//! frames; see `lidar_common.rs` for what is checked.
+//! frames; about half the frames have their speed and angles pinned plausible
+//! (`lidar_common::ld06_pin_plausible`), the rest stay random; see `lidar_common.rs` for what is
+//! checked.
 //!
 //! Run: `cargo +nightly fuzz run ld06_decode` from the repository root.
 
@@ -19,6 +21,8 @@ fuzz_target!(|data: &[u8]| {
         f[0] = ld06::HEADER;
         f[1] = ld06::VER_LEN;
         f[2..2 + fields.len()].copy_from_slice(fields);
+        // Half the frames pinned plausible, so points reach the assemblers.
+        lidar_common::ld06_pin_plausible(&mut f[2..46]);
         f[46] = ld06::crc8(&f[..46]);
         f
     });

@@ -100,3 +100,27 @@ pub fn check<D: StreamDecoder>(
         );
     }
 }
+
+/// For the LD06 target: when the top bit of the fuzzed speed's high byte is set (a speed of
+/// 32,768 °/s or more, which the plausibility check rejects anyway), pins the frame's fields
+/// (`fields` = frame bytes 2..46) to a plausible frame: speed into 1,800–4,680 °/s, start angle
+/// below 36,000, end angle within `Ld06Frame::max_span_cdeg` of it. The other half of the frames
+/// keep their random fields, so the implausible and out-of-range branches are reached too.
+#[allow(dead_code)] // only the LD06 target calls it
+pub fn ld06_pin_plausible(fields: &mut [u8]) {
+    use beamfield::lidar::ld06::{
+        Ld06Frame, FULL_TURN_CDEG, MAX_SPEED_DEG_PER_S, MIN_SPEED_DEG_PER_S,
+    };
+    if fields.len() < 42 || fields[1] & 0x80 == 0 {
+        return;
+    }
+    let le = |i: usize| u16::from_le_bytes([fields[i], fields[i + 1]]);
+    let range = MAX_SPEED_DEG_PER_S - MIN_SPEED_DEG_PER_S + 1;
+    let speed = MIN_SPEED_DEG_PER_S + (le(0) & 0x7fff) % range;
+    let start = le(2) % FULL_TURN_CDEG;
+    let span = (u32::from(le(40)) % (Ld06Frame::max_span_cdeg(speed) + 1)) as u16;
+    let end = (start + span) % FULL_TURN_CDEG;
+    fields[0..2].copy_from_slice(&speed.to_le_bytes());
+    fields[2..4].copy_from_slice(&start.to_le_bytes());
+    fields[40..42].copy_from_slice(&end.to_le_bytes());
+}

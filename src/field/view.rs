@@ -253,7 +253,9 @@ impl<'a> FieldView<'a> {
     }
 
     /// The code at row-major index `i = iy·width + ix` (`None` past the last cell). O(1) in
-    /// both encodings (a division for a tiled blob).
+    /// both encodings (a division for a tiled blob). Only with `tiled-field`: without it the
+    /// ray caster reads the raw slice alone.
+    #[cfg(feature = "tiled-field")]
     #[inline(always)]
     pub(crate) fn code_at_index(&self, i: usize) -> Option<u8> {
         match self.cells {
