@@ -17,10 +17,10 @@ pub mod xorshift;
 
 use std::path::PathBuf;
 
-/// The shared real-data folder (`shared/data`: maps, the Intel laser log, the sonar ring data).
+/// The real-data folder: the maps, the Intel laser log and the sonar ring data that the tests
+/// use, kept in the repository's `data/` (each folder with its provenance and licence).
 ///
-/// Looked up as `$BEAMFIELD_DATA` if set, else as `shared/data` beside the repository (the
-/// layout of a developer machine and of CI), walking up from this crate's directory.
+/// `$BEAMFIELD_DATA`, when set, overrides it (a folder with the same layout).
 ///
 /// # Panics
 /// When the folder cannot be found: the tests that need real data must not pass silently
@@ -29,18 +29,14 @@ pub fn data_dir() -> PathBuf {
     if let Some(p) = std::env::var_os("BEAMFIELD_DATA") {
         return PathBuf::from(p);
     }
-    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    loop {
-        let candidate = dir.join("shared").join("data");
-        if candidate.join("README.md").is_file() {
-            return candidate;
-        }
-        if !dir.pop() {
-            panic!(
-                "shared/data not found above {}; set BEAMFIELD_DATA",
-                env!("CARGO_MANIFEST_DIR")
-            );
-        }
-    }
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("data");
+    assert!(
+        dir.join("README.md").is_file(),
+        "the repository's data folder {} is missing (set BEAMFIELD_DATA to use another)",
+        dir.display()
+    );
+    dir
 }
 pub mod corridor;

@@ -1,5 +1,5 @@
 //! Reader of the UCI "Wall-Following Robot Navigation" 24-sonar ring data
-//! (`shared/data/sonar_uci_wall_following/sensor_readings_24.data`, see its README).
+//! (`data/sonar_uci_wall_following/sensor_readings_24.data`, see its README).
 //!
 //! Rows are CRLF-terminated, 24 ranges in metres (US1…US24) and an action label. US1 points
 //! forward and the numbering runs clockwise, 15° apart, so transducer `k` (0-based) is at

@@ -27,6 +27,12 @@ fn checked_in_demo_assets_are_current() {
         segment == fresh.lidar_segment_rs,
         "firmware/assets/lidar_segment.rs is stale: run `cargo xtask demo-assets`"
     );
+    let tiled =
+        std::fs::read(assets.join("intel-tiled.bin")).expect("firmware/assets/intel-tiled.bin");
+    assert!(
+        tiled == beamfield_tools::field_cmd::tile_blob(&fresh.blob).expect("tile"),
+        "firmware/assets/intel-tiled.bin is stale: run `cargo xtask demo-assets`"
+    );
     // And the blob is one the device accepts.
     let view = beamfield::FieldView::parse(&blob).expect("valid blob");
     assert!(view.width() > 100 && view.height() > 100);

@@ -1,5 +1,5 @@
 //! The CARMEN reader on the real Intel lab log, checked against the figures of
-//! `shared/data/laser_intel_lab/README.md` (counted independently of this code).
+//! `data/laser_intel_lab/README.md` (counted independently of this code).
 
 use beamfield::Reading;
 use beamfield_tools::carmen::{CarmenLog, MaxRange, ReadOptions};

@@ -192,7 +192,7 @@ pub fn demo_assets() -> Result {
         "--example",
         "demo_assets",
         "--",
-        "../shared/data/laser_intel_lab/intel-corrected.log",
+        "data/laser_intel_lab/intel-corrected.log",
         "firmware/assets",
     ]))
 }
