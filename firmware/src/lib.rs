@@ -164,7 +164,7 @@ pub fn exit(ok: bool) -> ! {
 }
 
 /// Marks the start of a measured region for the QEMU instruction-count plugin
-/// (`../shared/tools/qemu-insncount/`): it counts the instructions executed from a call of
+/// (`xtask/insncount/insncount.c`, run by `cargo xtask count`): it counts the instructions executed from a call of
 /// this function to the next call of [`bench_mark_end`].
 ///
 /// Never inlined and never merged with [`bench_mark_end`] (the bodies differ), so each has its

@@ -4,8 +4,8 @@
 //! deliberate panic).
 
 use super::{
-    build_firmware, capture, cargo, ensure_llvm_nm, ensure_qemu, ensure_target, insncount_dir,
-    repo_root, run_counted, show, Result, FIRMWARE_TARGET,
+    build_firmware, capture, cargo, ensure_llvm_nm, ensure_qemu, ensure_target, repo_root, show,
+    Result, FIRMWARE_TARGET,
 };
 use std::collections::BTreeMap;
 use std::fs;
@@ -191,8 +191,7 @@ fn parse_run(out: &str, err: &str) -> Result<Run> {
 
 /// Runs `budget` under the counting plugin (as `cargo xtask insns` does).
 fn run_budget(elf: &Path, machine: &str) -> Result<Run> {
-    let tools = insncount_dir()?;
-    let (code, out, err) = run_counted(&tools, elf, machine, "budget")?;
+    let (code, out, err) = crate::insncount::run_counted(elf, machine, "budget")?;
     if code != 0 {
         eprint!("{out}{err}");
         return Err(format!("the budget program exited {code} under QEMU"));

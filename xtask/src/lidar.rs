@@ -194,54 +194,6 @@ fn run_qemu(elf: &Path, stream: &[u8], extra: &[String]) -> Result<Run> {
     })
 }
 
-/// The QEMU counting plugin (`../shared/tools/qemu-insncount/insncount.c`), compiled into
-/// `dir`, and QEMU's arguments to count between the firmware's marker functions.
-fn plugin_args(elf: &Path, dir: &Path) -> Result<Vec<String>> {
-    super::ensure_llvm_nm()?;
-    let tools = super::insncount_dir()?;
-    let so = dir.join("libinsncount.so");
-    super::run(
-        Command::new("gcc")
-            .args(["-O2", "-shared", "-fPIC", "-o"])
-            .arg(&so)
-            .arg(tools.join("insncount.c")),
-    )
-    .map_err(|e| format!("{e} (gcc compiles the QEMU counting plugin: apt-get install gcc)"))?;
-    let nm = super::llvm_nm();
-    let syms = capture(Command::new(&nm).arg(elf))?;
-    let addr = |name: &str| {
-        syms.lines()
-            .find_map(|l| {
-                let mut w = l.split_whitespace();
-                let a = w.next()?;
-                (w.nth(1)? == name).then(|| format!("0x{a}"))
-            })
-            .ok_or_else(|| format!("no symbol {name} in {}", elf.display()))
-    };
-    Ok(vec![
-        "-plugin".into(),
-        format!(
-            "{},start={},end={}",
-            so.display(),
-            addr("bench_mark_start")?,
-            addr("bench_mark_end")?
-        ),
-        "-d".into(),
-        "plugin".into(),
-    ])
-}
-
-/// Instructions per region, in order, from the plugin's lines.
-fn region_counts(text: &str) -> Vec<u64> {
-    text.lines()
-        .filter_map(|l| {
-            let rest = l.strip_prefix("insncount: region ")?;
-            let (_, n) = rest.split_once(": ")?;
-            n.strip_suffix(" instructions")?.parse().ok()
-        })
-        .collect()
-}
-
 /// Runs the sensor path: streams the LD06 stream into the emulated USART, checks the transport
 /// (count and CRC-32), the plan's expectations (frames, corrupted beams, no wrong beam, every
 /// scan's best pose near its logged pose) and the host's recomputation to the printed digits,
@@ -262,16 +214,12 @@ pub fn lidar(count: bool, split: bool) -> Result {
         crate::lidar_ref::FLIPS.len(),
         stream.len()
     );
-    let plugin_dir = scratch()?.with_extension("plugin");
-    fs::create_dir_all(&plugin_dir).map_err(|e| format!("{}: {e}", plugin_dir.display()))?;
     let extra = if count {
-        plugin_args(&elf, &plugin_dir)?
+        crate::insncount::qemu_args(&elf, ", or run `cargo xtask lidar --no-count`")?
     } else {
         Vec::new()
     };
-    let run = run_qemu(&elf, stream, &extra);
-    let _ = fs::remove_dir_all(&plugin_dir);
-    let run = run?;
+    let run = run_qemu(&elf, stream, &extra)?;
     // The report, without the plugin's lines (they go to stderr).
     print!("{}", run.stdout);
     match run.code {
@@ -386,7 +334,7 @@ pub fn lidar(count: bool, split: bool) -> Result {
 
     // 4. Instructions per received byte: decode + assembly against the CRC-32 baseline.
     if count {
-        let counts = region_counts(&run.stderr);
+        let counts = crate::insncount::region_counts(&run.stderr);
         let regions = line
             .rsplit_once("; ")
             .and_then(|(_, t)| t.strip_suffix(" counted regions"))

@@ -5,6 +5,7 @@ mod budgets;
 mod demo;
 mod demo_f64;
 mod demo_ref;
+mod insncount;
 mod lidar;
 mod lidar_ref;
 mod track;
@@ -90,9 +91,9 @@ enum Task {
     /// Count guest instructions per beam of the beam mixture and of the likelihood field
     /// (prepared and per-pose paths, real map and scans), with baselines, under QEMU.
     ///
-    /// Builds firmware/src/bin/insns.rs (release) and runs it with the counting plugin of
-    /// ../shared/tools/qemu-insncount/ (needs gcc, and llvm-nm from `rustup component add
-    /// llvm-tools`, which is installed if missing). Counts are exact and repeat run to run;
+    /// Builds firmware/src/bin/insns.rs (release) and runs it with the repository's counting
+    /// plugin (xtask/insncount/, built with gcc on first use; llvm-nm from `rustup component
+    /// add llvm-tools` is installed if missing). Counts are exact and repeat run to run;
     /// they are instructions, not cycles.
     Insns {
         /// QEMU machine.
@@ -132,14 +133,14 @@ enum Task {
         /// Board (QEMU machine and memory layout).
         #[arg(long, value_enum, default_value = "mps2-an386")]
         board: demo::Board,
-        /// Run under QEMU's counting plugin instead (../shared/tools/qemu-insncount; needs gcc
-        /// and llvm-tools) and print the instructions per particle per update, scoring included
+        /// Run under QEMU's counting plugin instead (xtask/insncount; needs gcc and
+        /// llvm-tools) and print the instructions per particle per update, scoring included
         /// and excluded, and the program's RAM; the bit-equality check still runs.
         #[arg(long)]
         insns: bool,
     },
     /// Regenerate firmware/assets/track.rs (the track's scans, logged poses and synthesized
-    /// odometry) from ../shared/data.
+    /// odometry) from the Intel log in data/.
     TrackAssets,
     /// Budgets of the scoring core against the demo's targets, as a table: .text/.rodata/.bss
     /// (size_core minus size_skeleton), stack high-water marks (painted stack), instructions
@@ -185,7 +186,7 @@ enum Task {
         #[arg(long, conflicts_with = "no_count")]
         split: bool,
     },
-    /// Regenerate firmware/assets/ (Intel map blob and scans) from ../shared/data.
+    /// Regenerate firmware/assets/ (Intel map blob and scans) from the Intel log in data/.
     DemoAssets,
     /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
     Refcases {
@@ -198,6 +199,17 @@ enum Task {
         /// Only check that the checked-in file is up to date (exit 1 if not).
         #[arg(long)]
         check: bool,
+    },
+    /// Run a firmware image under QEMU with the counting plugin (xtask/insncount, built with
+    /// gcc on first use) and print the instructions of every region between its
+    /// `bench_mark_start` and `bench_mark_end` calls. Fails if it reports no region or exits
+    /// non-zero.
+    Count {
+        /// The firmware ELF (e.g. firmware/target/thumbv6m-none-eabi/release/fixed_m0).
+        elf: PathBuf,
+        /// QEMU machine (mps2-an386, netduinoplus2, lm3s6965evb, microbit, ...).
+        #[arg(long, default_value = "mps2-an386")]
+        machine: String,
     },
     /// The firmware part of CI: refcases --check, modelcases --check, cross, qemu (check and
     /// models), insns, budgets, nopanic (and nopanic --show-failure).
@@ -213,6 +225,7 @@ fn main() -> ExitCode {
             debug,
         } => qemu(&bin, &machine, !debug),
         Task::Insns { machine } => insns(&machine),
+        Task::Count { elf, machine } => insncount::count(&elf, &machine),
         Task::Cross => cross(),
         Task::Demo { board, encoding } => demo::demo(board, encoding),
         Task::Willow => willow::willow(),
@@ -430,51 +443,6 @@ fn qemu(bin: &str, machine: &str, release: bool) -> Result {
     }
 }
 
-/// The shared instruction-count tools, beside the repository (`../shared/tools/...`).
-/// Runs `elf` on `machine` under the QEMU counting plugin (`count-insns.sh` in `tools`),
-/// capturing its output as `name.stdout`/`name.stderr`: (exit code, stdout, stderr).
-fn run_counted(
-    tools: &Path,
-    elf: &Path,
-    machine: &str,
-    name: &str,
-) -> Result<(i32, String, String)> {
-    // The script caches the compiled plugin in $TMPDIR: give it a private one, so a stale
-    // plugin from elsewhere is never used.
-    let plugin_dir = scratch()?.with_extension("plugin");
-    fs::create_dir_all(&plugin_dir).map_err(|e| format!("{}: {e}", plugin_dir.display()))?;
-    let result = run_to_files(
-        Command::new("bash")
-            .arg(tools.join("count-insns.sh"))
-            .arg(elf)
-            .arg(machine)
-            .env("TMPDIR", &plugin_dir),
-        name,
-    );
-    let _ = fs::remove_dir_all(&plugin_dir);
-    result
-}
-
-fn insncount_dir() -> Result<PathBuf> {
-    if let Some(p) = std::env::var_os("BEAMFIELD_INSNCOUNT") {
-        return Ok(PathBuf::from(p));
-    }
-    let mut dir = repo_root();
-    loop {
-        let c = dir.join("shared/tools/qemu-insncount");
-        if c.join("count-insns.sh").is_file() {
-            return Ok(c);
-        }
-        if !dir.pop() {
-            return Err(
-                "../shared/tools/qemu-insncount/count-insns.sh not found above the repository; \
-                 set BEAMFIELD_INSNCOUNT to its folder"
-                    .to_string(),
-            );
-        }
-    }
-}
-
 /// `llvm-nm` from PATH, else the one of the Rust sysroot (`rustup component add llvm-tools`).
 fn llvm_nm() -> PathBuf {
     let on_path = Command::new("llvm-nm")
@@ -513,37 +481,18 @@ fn ensure_llvm_nm() -> Result {
 fn insns(machine: &str) -> Result {
     ensure_qemu()?;
     ensure_llvm_nm()?;
-    if Command::new("gcc")
-        .arg("--version")
-        .stdout(Stdio::null())
-        .status()
-        .is_err()
-    {
-        return Err("gcc not found (it compiles the QEMU counting plugin): \
-                    sudo apt-get install -y gcc"
-            .to_string());
-    }
-    let tools = insncount_dir()?;
     // Regions 10-11 read a tiled blob: one build with the tiled reader measures both encodings.
     let elves = build_firmware(true, Some("tiled"))?;
     let elf = elves
         .get("insns")
         .ok_or("the firmware has no `insns` program")?;
-    let (code, out, err) = run_counted(&tools, elf, machine, "insns")?;
+    let (code, out, err) = insncount::run_counted(elf, machine, "insns")?;
     print!("{out}");
     if code != 0 {
         eprint!("{err}");
         return Err(format!("the counting run exited {code}"));
     }
-    let counts: Vec<u64> = out
-        .lines()
-        .chain(err.lines())
-        .filter_map(|l| {
-            let rest = l.strip_prefix("insncount: region ")?;
-            let (_, n) = rest.split_once(": ")?;
-            n.strip_suffix(" instructions")?.parse().ok()
-        })
-        .collect();
+    let counts = insncount::region_counts(&err);
     if counts.len() != INSNS_REGIONS.len() {
         eprint!("{err}");
         return Err(format!(

@@ -9,7 +9,7 @@ mod track_plan;
 
 use super::budgets::{llvm_tool, sections};
 use super::demo::{build, build_and_run, qemu_failure, Board};
-use super::{cargo, insncount_dir, repo_root, run, run_counted, Result};
+use super::{cargo, repo_root, run, Result};
 use beamfield::mcl::Particles;
 use track_plan::{Step, Summary, TrackScan, PARTICLES};
 
@@ -197,9 +197,8 @@ fn per_particle(counts: &[u64]) -> Result<(f64, f64, f64)> {
 /// the host as [`track`] does, and prints the instructions per particle per update (scoring
 /// included and excluded) and the program's RAM (`.data`, `.bss`, `.uninit` by `llvm-size`).
 pub fn track_insns(board: Board) -> Result {
-    let tools = insncount_dir()?;
     let elf = build(board, "track")?;
-    let (code, out, err) = run_counted(&tools, &elf, board.machine(), "track-insns")?;
+    let (code, out, err) = crate::insncount::run_counted(&elf, board.machine(), "track-insns")?;
     if code != 0 {
         print!("{out}");
         eprint!("{err}");
@@ -208,15 +207,7 @@ pub fn track_insns(board: Board) -> Result {
     for line in check(&out)? {
         println!("{line}");
     }
-    let counts: Vec<u64> = out
-        .lines()
-        .chain(err.lines())
-        .filter_map(|l| {
-            let rest = l.strip_prefix("insncount: region ")?;
-            let (_, n) = rest.split_once(": ")?;
-            n.strip_suffix(" instructions")?.parse().ok()
-        })
-        .collect();
+    let counts = crate::insncount::region_counts(&err);
     let (motion, score, update) = per_particle(&counts)?;
     let beams = track_plan::BEAMS as f64;
     println!(
@@ -269,7 +260,7 @@ pub fn track_assets() -> Result {
         "--example",
         "track_assets",
         "--",
-        "../shared/data/laser_intel_lab/intel-corrected.log",
+        "data/laser_intel_lab/intel-corrected.log",
         "firmware/assets/track.rs",
     ]))
 }

@@ -8,8 +8,8 @@
 //!
 //! Filter overhead per particle per update = region 0 + region 1 − region 2, each divided by
 //! the particle count; the program prints the divisors on its `mcl divisors:` line. Run:
-//! `cd firmware && cargo build --release --bin mcl_insns`, then
-//! `bash ../../shared/tools/qemu-insncount/count-insns.sh target/thumbv7em-none-eabihf/release/mcl_insns`.
+//! `cd firmware && cargo build --release --target thumbv7em-none-eabihf --bin mcl_insns`, then
+//! from the repository's root `cargo xtask count firmware/target/thumbv7em-none-eabihf/release/mcl_insns`.
 #![no_std]
 #![no_main]
 
