@@ -24,8 +24,8 @@ fn no_compiler(hint: &str) -> String {
 }
 
 /// The built plugin: `target/insncount/libinsncount-CRC.so`, named after the CRC-32 of the
-/// source so an edited plugin is always rebuilt. `hint` ends the message when gcc is missing
-/// (e.g. ", or run with --no-count").
+/// source so an edited plugin is always rebuilt. The compiler is `$CC`, else `gcc`. `hint` ends
+/// the message when it is missing (e.g. ", or run with --no-count").
 pub fn plugin(hint: &str) -> Result<PathBuf> {
     let src = repo_root().join(SOURCE);
     let text = fs::read(&src).map_err(|e| format!("{}: {e}", src.display()))?;
@@ -41,24 +41,30 @@ pub fn plugin(hint: &str) -> Result<PathBuf> {
     fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     // Built under a private name, then renamed: a concurrent task never loads half a file.
     let partial = dir.join(format!("libinsncount-{crc:08x}.{}.tmp", std::process::id()));
-    let mut gcc = Command::new("gcc");
-    gcc.args(["-O2", "-Wall", "-shared", "-fPIC", "-o"])
-        .arg(&partial)
-        .arg(&src);
-    eprintln!("+ {}", super::show(&gcc));
-    let out = match gcc.output() {
+    let compiler = std::env::var_os("CC").unwrap_or_else(|| "gcc".into());
+    compile(Command::new(compiler), &src, &partial, hint)?;
+    fs::rename(&partial, &so).map_err(|e| format!("{}: {e}", so.display()))?;
+    Ok(so)
+}
+
+/// Compiles the plugin's source `src` into the shared object `so` with `cc`.
+fn compile(mut cc: Command, src: &Path, so: &Path, hint: &str) -> Result {
+    cc.args(["-O2", "-Wall", "-shared", "-fPIC", "-o"])
+        .arg(so)
+        .arg(src);
+    eprintln!("+ {}", super::show(&cc));
+    let out = match cc.output() {
         Ok(out) => out,
         Err(e) if e.kind() == ErrorKind::NotFound => return Err(no_compiler(hint)),
-        Err(e) => return Err(format!("cannot start gcc: {e}")),
+        Err(e) => return Err(format!("cannot start the C compiler: {e}")),
     };
     if !out.status.success() {
         return Err(format!(
-            "gcc could not build {SOURCE}:\n{}",
+            "the C compiler could not build {SOURCE}:\n{}",
             String::from_utf8_lossy(&out.stderr)
         ));
     }
-    fs::rename(&partial, &so).map_err(|e| format!("{}: {e}", so.display()))?;
-    Ok(so)
+    Ok(())
 }
 
 /// QEMU's arguments to count between the markers of `elf` with the plugin.
@@ -144,6 +150,33 @@ pub fn count(elf: &Path, machine: &str) -> Result {
 
 #[cfg(test)]
 mod tests {
+    use std::process::Command;
+
+    #[test]
+    fn a_missing_compiler_is_one_line_naming_the_package_and_the_way_out() {
+        let dir = std::env::temp_dir();
+        let err = super::compile(
+            Command::new("/nonexistent/gcc"),
+            &super::repo_root().join(super::SOURCE),
+            &dir.join("never-built.so"),
+            ", or run with --no-count",
+        )
+        .unwrap_err();
+        assert!(!err.contains('\n'), "{err}");
+        assert!(err.contains("apt-get install -y gcc"), "{err}");
+        assert!(err.ends_with("--no-count"), "{err}");
+    }
+
+    #[test]
+    fn the_plugin_source_compiles_without_warnings() {
+        let so = std::env::temp_dir().join(format!("insncount-test-{}.so", std::process::id()));
+        let mut cc = Command::new("gcc");
+        cc.arg("-Werror");
+        let built = super::compile(cc, &super::repo_root().join(super::SOURCE), &so, "");
+        let _ = std::fs::remove_file(&so);
+        built.unwrap();
+    }
+
     #[test]
     fn region_lines_are_read_in_order_and_others_ignored() {
         let log = "insncount: region 0: 12 instructions\nnoise\n\
