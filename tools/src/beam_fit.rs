@@ -108,6 +108,8 @@ fn parse_range(s: &str) -> Result<(usize, usize), String> {
 pub enum FitError {
     /// Reading the blob file.
     Io(PathBuf, std::io::Error),
+    /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
+    Read(crate::limits::ReadError),
     /// The blob is invalid.
     Blob(PathBuf, BlobError),
     /// The blob cannot be ray cast.
@@ -128,6 +130,7 @@ impl std::fmt::Display for FitError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Read(e) => write!(f, "{e}"),
             Self::Blob(p, e) => write!(f, "{}: {e}", p.display()),
             Self::RayCast(e) => write!(f, "blob cannot be ray cast: {e}"),
             Self::Log(e) => write!(f, "{e}"),
@@ -283,7 +286,12 @@ pub fn amcl_pairs(i: &BeamIntrinsics) -> [(&'static str, f32); 7] {
 /// # Errors
 /// [`FitError`].
 pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
-    let bytes = std::fs::read(&args.field).map_err(|e| FitError::Io(args.field.clone(), e))?;
+    let bytes = crate::limits::read_regular_file(
+        &args.field,
+        crate::limits::MAX_FIELD_FILE_BYTES,
+        "field file",
+    )
+    .map_err(FitError::Read)?;
     let view = crate::field_cmd::parse_field_file(&bytes)
         .map_err(|e| FitError::Blob(args.field.clone(), e))?;
     let t_read = Instant::now();

@@ -120,6 +120,8 @@ pub struct CalibrateArgs {
 pub enum ScoreCmdError {
     /// The blob could not be read.
     Io(PathBuf, std::io::Error),
+    /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
+    Read(crate::limits::ReadError),
     /// The blob is malformed.
     Blob(beamfield::field::BlobError),
     /// The log could not be read.
@@ -134,6 +136,7 @@ impl std::fmt::Display for ScoreCmdError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Read(e) => write!(f, "{e}"),
             Self::Blob(e) => write!(f, "bad field blob: {e}"),
             Self::Log(e) => write!(f, "{e}"),
             Self::Usage(m) => f.write_str(m),
@@ -156,7 +159,12 @@ struct Loaded {
 }
 
 fn load(m: &ModelArgs) -> Result<Loaded, ScoreCmdError> {
-    let blob = std::fs::read(&m.field).map_err(|e| ScoreCmdError::Io(m.field.clone(), e))?;
+    let blob = crate::limits::read_regular_file(
+        &m.field,
+        crate::limits::MAX_FIELD_FILE_BYTES,
+        "field file",
+    )
+    .map_err(ScoreCmdError::Read)?;
     crate::field_cmd::parse_field_file(&blob).map_err(ScoreCmdError::Blob)?;
     let options = ReadOptions {
         max_range_m: m.max_range,

@@ -144,6 +144,8 @@ pub struct TrackArgs {
 pub enum TrackError {
     /// A file could not be read or written.
     Io(PathBuf, std::io::Error),
+    /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
+    Read(crate::limits::ReadError),
     /// The distance-field blob is malformed.
     Blob(BlobError),
     /// The free-space section after the blob is malformed.
@@ -162,6 +164,7 @@ impl std::fmt::Display for TrackError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Read(e) => write!(f, "{e}"),
             Self::Blob(e) => write!(f, "bad field blob: {e}"),
             Self::FreeSpace(e) => write!(f, "bad free-space section: {e}"),
             Self::Log(e) => write!(f, "{e}"),

@@ -60,7 +60,9 @@ pub fn load(
     z_rand: f32,
     sigma_hit: f32,
 ) -> Result<TrackInput, TrackError> {
-    let bytes = std::fs::read(field).map_err(|e| TrackError::Io(field.to_path_buf(), e))?;
+    let bytes =
+        crate::limits::read_regular_file(field, crate::limits::MAX_FIELD_FILE_BYTES, "field file")
+            .map_err(TrackError::Read)?;
     let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
     let max_range = log
         .max_range
