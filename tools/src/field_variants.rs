@@ -209,7 +209,7 @@ pub fn run_score_variants(a: &ScoreVariantsArgs, json: bool) -> Result<String, S
     }
     let mut maps = Vec::with_capacity(a.variants.len());
     for p in &a.variants {
-        eprintln!("score-variants: loading {}", p.display());
+        crate::progress::note(&format!("score-variants: loading {}", p.display()));
         let m = load_map_limited(p, DEFAULT_MAX_CELLS)
             .map_err(|e| ScoreVariantsError::Field(FieldCmdError::Map(e)))?;
         maps.push((name_of(p), m));
@@ -241,10 +241,10 @@ pub fn run_score_variants(a: &ScoreVariantsArgs, json: bool) -> Result<String, S
         Some(t) => parse_pose(t)?,
         None => s.pose,
     };
-    eprintln!(
+    crate::progress::note(&format!(
         "score-variants: one distance transform per variant ({} variants)",
         maps.len()
-    );
+    ));
     let v = score_variants(&maps, a.max_dist, params, &layout, &scan, &pose, a.margin)?;
     let mut out = String::new();
     if json {

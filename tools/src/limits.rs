@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 pub const MAX_FIELD_FILE_BYTES: u64 = 128 << 20;
 
 /// Largest LiDAR capture `lidar decode` reads: 64 MiB. The Intel log's 910 scans encode to
-/// 0.8–1.9 MB in the four protocols; 64 MiB holds about 33,000 XV-11 revolutions (the most bytes
+/// 0.75–1.8 MB in the four protocols; 64 MiB holds about 33,000 XV-11 revolutions (the most bytes
 /// per revolution, 1,980), close to two hours of a 5 Hz sensor. The capture is decoded in chunks
 /// as it is read, never held whole.
 pub const MAX_CAPTURE_BYTES: u64 = 64 << 20;
