@@ -134,6 +134,12 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
     for bad in &log.bad_lines {
         eprintln!("skipped {bad}");
     }
+    if log.bad_line_count > log.bad_lines.len() {
+        eprintln!(
+            "skipped {} more malformed lines",
+            log.bad_line_count - log.bad_lines.len()
+        );
+    }
     let Some(max_range_m) = log.max_range.value_m() else {
         return fail(format!(
             "{}: no max-range value could be detected (no single value dominates the top of the \
@@ -165,7 +171,7 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
         let trajectory: Vec<(f64, f64)> = log
             .scans
             .iter()
-            .map(|s| (f64::from(s.pose.x_m), f64::from(s.pose.y_m)))
+            .map(|s| (s.pose_f64.x_m, s.pose_f64.y_m))
             .collect();
         if let Err(e) = write_png(&grid, &trajectory, png) {
             return fail(e);
@@ -189,6 +195,7 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
                 "max_range_free_m": options.max_range_free_m,
                 "readings": stats,
                 "bad_lines": log.bad_lines.iter().map(ToString::to_string).collect::<Vec<_>>(),
+                "bad_lines_total": log.bad_line_count,
             })
         );
     } else {
@@ -217,8 +224,8 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
         if let Some(png) = &args.png {
             println!("picture: {}", png.display());
         }
-        if !log.bad_lines.is_empty() {
-            println!("{} malformed lines skipped", log.bad_lines.len());
+        if log.bad_line_count > 0 {
+            println!("{} malformed lines skipped", log.bad_line_count);
         }
     }
     ExitCode::SUCCESS
@@ -258,6 +265,7 @@ fn log_info(args: &LogInfoArgs, json: bool) -> ExitCode {
                 "bad_lines": log.bad_lines.iter().map(|e| serde_json::json!({
                     "line": e.line, "error": e.to_string(),
                 })).collect::<Vec<_>>(),
+                "bad_lines_total": log.bad_line_count,
             })
         );
     } else {
@@ -326,14 +334,15 @@ fn print_info(path: &Path, log: &CarmenLog, s: &LogStats) {
     );
     let params: Vec<String> = log.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
     println!("params: {}", params.join(", "));
-    println!("bad lines: {}", log.bad_lines.len());
+    println!("bad lines: {}", log.bad_line_count);
     for e in log.bad_lines.iter().take(20) {
         println!("  {e}");
     }
-    if log.bad_lines.len() > 20 {
+    if log.bad_line_count > 20 {
         println!(
-            "  … and {} more (use --json for all)",
-            log.bad_lines.len() - 20
+            "  … and {} more (use --json for the first {})",
+            log.bad_line_count - 20,
+            crate::carmen::MAX_BAD_LINES_KEPT
         );
     }
 }

@@ -110,7 +110,7 @@ impl MappingOptions {
 }
 
 /// Errors building a map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum MappingError {
     /// The log has no scan with a valid reading.
@@ -125,6 +125,33 @@ pub enum MappingError {
         /// Cells along y.
         height: u64,
     },
+    /// The map lies so far from the origin that f64 coordinates there are spaced more than
+    /// [`MAX_COORDINATE_ULP_CELLS`] of a cell apart: cells could not be told apart reliably.
+    Imprecise {
+        /// The largest coordinate magnitude of the map (its extent with the margin), metres.
+        magnitude_m: f64,
+        /// The spacing of f64 values at that magnitude, metres.
+        spacing_m: f64,
+        /// The resolution asked for, metres.
+        resolution_m: f64,
+    },
+}
+
+/// Largest spacing of f64 coordinates allowed at the map's farthest point, as a fraction of
+/// a cell: 1/1024. The builder computes cells from world coordinates in f64
+/// (`(x − origin) / resolution`), so a coordinate is off by up to this spacing; at 1/1024 of
+/// a cell, only end points within a thousandth of a cell from a cell edge can land in the
+/// neighbouring cell. At 0.05 m cells this allows coordinates up to 2³⁸ m (2.7·10¹¹ m).
+pub const MAX_COORDINATE_ULP_CELLS: f64 = 1.0 / 1024.0;
+
+/// The spacing of f64 values at magnitude `m` (its unit in the last place).
+fn f64_spacing(m: f64) -> f64 {
+    let m = m.abs();
+    if !m.is_finite() {
+        return f64::INFINITY;
+    }
+    let next = f64::from_bits(m.to_bits() + 1);
+    next - m
 }
 
 /// Largest grid the builder makes (2²⁸ cells, 1 GiB of log-odds).
@@ -138,6 +165,16 @@ impl std::fmt::Display for MappingError {
             Self::TooLarge { width, height } => write!(
                 f,
                 "map of {width} × {height} cells is too large; use a coarser resolution"
+            ),
+            Self::Imprecise {
+                magnitude_m,
+                spacing_m,
+                resolution_m,
+            } => write!(
+                f,
+                "poses and end points reach {magnitude_m:e} m from the origin, where f64 \
+                 coordinates are {spacing_m:e} m apart: more than 1/1024 of a {resolution_m} m \
+                 cell; move the log nearer the origin or use a coarser resolution"
             ),
         }
     }
@@ -221,9 +258,10 @@ type Segment = ((f64, f64), (f64, f64), bool);
 fn beam_segment(scan: &LaserScan, i: usize, options: &MappingOptions) -> Option<Segment> {
     let z = *scan.ranges_m.get(i)?;
     let n = scan.ranges_m.len();
-    let a = f64::from(scan.pose.theta_rad) + crate::carmen::carmen_bearing_rad(i, n);
+    let p = scan.pose_f64;
+    let a = p.theta_rad + crate::carmen::carmen_bearing_rad(i, n);
     let (s, c) = a.sin_cos();
-    let start = (f64::from(scan.pose.x_m), f64::from(scan.pose.y_m));
+    let start = (p.x_m, p.y_m);
     let (length, hit) = match Reading::classify(z, options.max_range_m) {
         Reading::Range(z) => (f64::from(z), true),
         Reading::MaxRange => (options.max_range_free_m?, false),
@@ -247,7 +285,7 @@ pub fn build_from_log(
     // Extent: every pose, every end point and every capped max-range ray end.
     let mut extent = Extent::default();
     for scan in &log.scans {
-        extent.add(f64::from(scan.pose.x_m), f64::from(scan.pose.y_m));
+        extent.add(scan.pose_f64.x_m, scan.pose_f64.y_m);
         for i in 0..scan.ranges_m.len() {
             if let Some((_, end, _)) = beam_segment(scan, i, options) {
                 extent.add(end.0, end.1);
@@ -268,6 +306,24 @@ pub fn build_from_log(
         .max(1.0) as u64;
     if width.saturating_mul(height) > MAX_CELLS {
         return Err(MappingError::TooLarge { width, height });
+    }
+    let magnitude_m = [
+        b.x_min - options.margin_m,
+        b.x_max + options.margin_m,
+        b.y_min - options.margin_m,
+        b.y_max + options.margin_m,
+        origin_x_m,
+        origin_y_m,
+    ]
+    .iter()
+    .fold(0.0f64, |m, v| m.max(v.abs()));
+    let spacing_m = f64_spacing(magnitude_m);
+    if spacing_m > res * MAX_COORDINATE_ULP_CELLS {
+        return Err(MappingError::Imprecise {
+            magnitude_m,
+            spacing_m,
+            resolution_m: res,
+        });
     }
     let geometry = GridGeometry {
         width: width as usize,
@@ -395,6 +451,7 @@ mod tests {
                     ranges_m: ranges.clone(),
                     pose: *pose,
                     odom_pose: *pose,
+                    pose_f64: (*pose).into(),
                     timestamp_s: k as f64,
                     logger_timestamp_s: k as f64,
                     line: k + 1,
