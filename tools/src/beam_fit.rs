@@ -60,6 +60,10 @@ pub enum LambdaUpdate {
     Truncated,
 }
 
+/// Largest `fit --iterations`: 10,000 (EM stops at its tolerance within a few dozen on the
+/// shared logs; the trace holds one f64 per iteration).
+pub const MAX_FIT_ITERATIONS: u32 = 10_000;
+
 /// `beamfield fit`: EM for the beam model's intrinsics on a log.
 ///
 /// Casts z* once per beam from the logged laser poses through the blob (as the device would),
@@ -74,8 +78,8 @@ pub struct FitArgs {
     /// The CARMEN log (FLASER lines with corrected poses).
     #[arg(long)]
     pub log: PathBuf,
-    /// Largest number of EM iterations (M-steps).
-    #[arg(long, default_value_t = 100)]
+    /// Largest number of EM iterations (M-steps), at most 10,000.
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(..=i64::from(MAX_FIT_ITERATIONS)))]
     pub iterations: u32,
     /// The σ/λ update: `truncated` (monotone, unbiased λ) or `textbook` (Table 6.2).
     #[arg(long, value_enum, default_value_t = LambdaUpdate::Truncated)]
@@ -122,6 +126,8 @@ pub enum FitError {
     Scans(String),
     /// `--stride 0`.
     BadStride,
+    /// `--iterations` above [`MAX_FIT_ITERATIONS`].
+    BadIterations(u32),
     /// EM refused to run.
     Em(EmError),
 }
@@ -137,6 +143,9 @@ impl std::fmt::Display for FitError {
             Self::Intrinsics(e) => write!(f, "start intrinsics: {e}"),
             Self::Scans(e) => write!(f, "{e}"),
             Self::BadStride => f.write_str("--stride must be >= 1"),
+            Self::BadIterations(n) => {
+                write!(f, "--iterations {n}: must be at most {MAX_FIT_ITERATIONS}")
+            }
             Self::Em(e) => write!(f, "{e}"),
         }
     }
@@ -182,6 +191,9 @@ pub fn fit_log(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<FitReport, FitError> {
     let stride = Stride::new(args.stride).ok_or(FitError::BadStride)?;
+    if args.iterations > MAX_FIT_ITERATIONS {
+        return Err(FitError::BadIterations(args.iterations));
+    }
     let max_range_m = args
         .max_range
         .or(log.max_range.value_m())

@@ -645,17 +645,12 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                 return Err(FieldCmdError::ClampNeedsTiled);
             }
             let t0 = Instant::now();
-            let m = load_map_limited(&map, max_cells).map_err(FieldCmdError::Map)?;
-            let loaded = variants
-                .iter()
-                .map(|p| {
-                    Ok((
-                        p.clone(),
-                        load_map_limited(p, max_cells).map_err(FieldCmdError::Map)?,
-                    ))
-                })
-                .collect::<Result<Vec<_>, FieldCmdError>>()?;
-            let m = union_map(&m, &loaded)?;
+            let mut m = load_map_limited(&map, max_cells).map_err(FieldCmdError::Map)?;
+            // One variant at a time: memory does not grow with the number of variants.
+            for p in &variants {
+                let v = load_map_limited(p, max_cells).map_err(FieldCmdError::Map)?;
+                m = union_map(&m, &[(p.clone(), v)])?;
+            }
             let t1 = Instant::now();
             let mut blob = match clamp_m {
                 Some(d) => build_blob_clamped(&m, max_dist, d)?,

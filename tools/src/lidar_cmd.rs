@@ -93,6 +93,9 @@ pub enum LidarCmdError {
     CaptureTooLarge(PathBuf),
     /// The capture holds more than [`crate::limits::MAX_DECODED_SCANS`] scans.
     TooManyScans,
+    /// The stream `lidar encode` would write is longer than
+    /// [`crate::limits::MAX_CAPTURE_BYTES`] (what `lidar decode` reads).
+    StreamTooLarge,
 }
 
 impl std::fmt::Display for LidarCmdError {
@@ -109,6 +112,12 @@ impl std::fmt::Display for LidarCmdError {
                 f,
                 "{} is larger than {} bytes, the limit for a LiDAR capture",
                 p.display(),
+                crate::limits::MAX_CAPTURE_BYTES
+            ),
+            Self::StreamTooLarge => write!(
+                f,
+                "the stream would be larger than {} bytes, the limit for a LiDAR capture \
+                 (encode fewer --scans)",
                 crate::limits::MAX_CAPTURE_BYTES
             ),
             Self::TooManyScans => write!(
@@ -253,6 +262,9 @@ pub fn encode_scans<const N: usize>(
         }
         .map_err(LidarCmdError::Encode)?;
         out.extend_from_slice(&frames[..n]);
+        if out.len() as u64 > crate::limits::MAX_CAPTURE_BYTES {
+            return Err(LidarCmdError::StreamTooLarge);
+        }
         if options.format == Format::Ydlidar {
             prev = Some(rev.clone());
         }

@@ -17,6 +17,10 @@ use std::path::{Path, PathBuf};
 /// Beam capacity of the scans these commands read (CARMEN FLASER scans have 180 or 361).
 pub const MAX_BEAMS: usize = 1081;
 
+/// Most scores `calibrate` keeps (scans × grid poses, one f64 each): 2²⁵, 256 MiB. The
+/// default grid (41 × 41 × 41 poses) over the default 60 scans is 4.1 M.
+pub const MAX_CALIBRATE_SCORES: u64 = 1 << 25;
+
 /// Likelihood-field parameters shared by both commands.
 #[derive(Args, Debug, Clone)]
 pub struct ModelArgs {
@@ -538,6 +542,15 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
         ));
     }
     let l = load(&a.model)?;
+    let n = a.scans.min(l.log.scans.len());
+    let scores = (n as u64).saturating_mul(spec.len() as u64);
+    if scores > MAX_CALIBRATE_SCORES {
+        return Err(usage(format!(
+            "{n} scans of {} grid poses = {scores} scores, over the limit of \
+             {MAX_CALIBRATE_SCORES} (fewer --scans or a coarser grid)",
+            spec.len()
+        )));
+    }
     let lf = LikelihoodField::new(
         crate::field_cmd::parse_field_file(&l.blob).map_err(ScoreCmdError::Blob)?,
         l.params,
