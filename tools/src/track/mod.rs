@@ -81,9 +81,10 @@ pub struct TrackArgs {
     /// Tempering κ (8.25 is the value `beamfield calibrate` finds on the Intel log).
     #[arg(long, default_value_t = 8.25)]
     pub kappa: f32,
-    /// Score every S-th beam (at least 1).
+    /// Score every S-th beam (1 to 1081, the most beams a scan has here).
     #[arg(long, default_value_t = 1,
-          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..))]
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new()
+              .range(1..=crate::score_cmd::MAX_BEAMS as u64))]
     pub stride: usize,
     /// Odometry noise odom_alpha1..4 (variance coefficients, AMCL's convention), used both to
     /// synthesize the odometry and in the filter: "A" or "A1,A2,A3,A4".
