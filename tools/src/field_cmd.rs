@@ -143,6 +143,9 @@ pub enum FieldCmdError {
     /// A `field query` input line longer than [`crate::limits::MAX_QUERY_LINE_BYTES`] (its
     /// 1-based number); reading stops there.
     QueryLineTooLong(usize),
+    /// `field encode` of a blob with more cells than [`MAX_DECODED_CELLS`] (the file, width,
+    /// height).
+    TooManyCells(PathBuf, u32, u32),
     /// The blob is invalid, or could not be written.
     Blob(PathBuf, BlobError),
     /// The distance transform refused the grid.
@@ -175,6 +178,13 @@ impl std::fmt::Display for FieldCmdError {
             Self::Map(e) => write!(f, "{e}"),
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
             Self::Read(e) => write!(f, "{e}"),
+            Self::TooManyCells(p, w, h) => write!(
+                f,
+                "{}: a field of {w} x {h} = {} cells, more than {MAX_DECODED_CELLS}, the most a \
+                 field is decoded to",
+                p.display(),
+                u64::from(*w) * u64::from(*h)
+            ),
             Self::QueryLineTooLong(n) => write!(
                 f,
                 "standard input line {n}: longer than {} bytes (stopped reading)",
@@ -360,6 +370,9 @@ pub fn build_blob_clamped(
 /// encoding cannot record the clamp).
 pub fn untile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
     let view = parse_field_file(blob)?;
+    if !decodable(&view) {
+        return Err(BlobError::TooLarge);
+    }
     if view.clamp_code().is_some() {
         return Err(BlobError::BadClamp);
     }
@@ -368,6 +381,17 @@ pub fn untile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
     let mut out = vec![0u8; header.required_len()?];
     beamfield::field::emit_blob(&header, &codes, &mut out)?;
     Ok(out)
+}
+
+/// Most cells `field encode` decodes a blob to: as many as a raw blob within
+/// [`crate::limits::MAX_FIELD_FILE_BYTES`] holds (134,217,728). A tiled blob stores 16 cells in
+/// 2 bytes of tile index, so a tiled file within the limit could announce 8 times more; decoding
+/// and re-encoding costs about 3 bytes per cell.
+pub const MAX_DECODED_CELLS: u64 = crate::limits::MAX_FIELD_FILE_BYTES;
+
+/// `view` has at most [`MAX_DECODED_CELLS`] cells.
+fn decodable(view: &FieldView<'_>) -> bool {
+    u64::from(view.width()) * u64::from(view.height()) <= MAX_DECODED_CELLS
 }
 
 /// Every code of a view, row-major from the lowest y.
@@ -399,6 +423,9 @@ pub fn tile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
 /// half a code step, or at or above `d_max` (see [`clamp_code_for`]).
 pub fn tile_blob_clamped(blob: &[u8], clamp_m: Option<f32>) -> Result<Vec<u8>, BlobError> {
     let view = parse_field_file(blob)?;
+    if !decodable(&view) {
+        return Err(BlobError::TooLarge);
+    }
     let header = *view.header();
     let codes = codes_of(&view);
     let asked = match clamp_m {
@@ -725,6 +752,13 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             let bytes = read_field_file(&blob)?;
             let view =
                 parse_field_file(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            if !decodable(&view) {
+                return Err(FieldCmdError::TooManyCells(
+                    blob,
+                    view.width(),
+                    view.height(),
+                ));
+            }
             if encoding == Encoding::Raw && (clamp_m.is_some() || view.clamp_code().is_some()) {
                 return Err(FieldCmdError::ClampNeedsTiled);
             }

@@ -473,3 +473,35 @@ fn score_variants_takes_at_most_16_variants() {
          with its field)"
     );
 }
+
+#[test]
+fn field_encode_decodes_at_most_as_many_cells_as_a_raw_file_holds() {
+    use beamfield::field::{emit_blob_tiled, tiled_max_len, tiled_scratch_len, FieldHeader};
+    use beamfield_tools::field_cmd::MAX_DECODED_CELLS;
+    let d = scratch("encode-cells");
+    // 12,000 × 12,000 = 144 M cells in an 18 MB tiled file (2 bytes of index per 16 cells):
+    // decoded, more than a raw blob within the file limit holds.
+    let header = FieldHeader::new(12_000, 12_000, 0.05, 0.0, 0.0);
+    let codes = vec![255u8; 144_000_000];
+    let mut scratch = vec![0u32; tiled_scratch_len(&header).unwrap()];
+    let mut out = vec![0u8; tiled_max_len(&header).unwrap()];
+    let n = emit_blob_tiled(&header, &codes, &mut scratch, &mut out).unwrap();
+    drop((codes, scratch));
+    let path = d.join("tiled.bin");
+    std::fs::write(&path, &out[..n]).unwrap();
+    let p = path.display().to_string();
+    let o = d.join("raw.bin").display().to_string();
+    for encoding in ["raw", "tiled"] {
+        assert_eq!(
+            fails(&["field", "encode", &p, "-o", &o, "--encoding", encoding]),
+            format!(
+                "beamfield field: {p}: a field of 12000 x 12000 = 144000000 cells, more than \
+                 {MAX_DECODED_CELLS}, the most a field is decoded to"
+            )
+        );
+    }
+    assert!(!d.join("raw.bin").exists());
+    // It is still a valid blob: `field info` reads it without decoding.
+    let info = run_bounded(&["field", "info", &p], None);
+    assert!(info.status.success(), "{info:?}");
+}
