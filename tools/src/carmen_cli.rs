@@ -51,6 +51,11 @@ pub struct FromLogArgs {
     /// Skip malformed lines (they are counted and reported) instead of stopping at the first.
     #[arg(long)]
     pub skip_bad_lines: bool,
+    /// Refuse a map of more cells than this (the builder needs about 13 bytes per cell; the
+    /// Intel map is 0.78 M cells); at most 268,435,456.
+    #[arg(long = "max-cells", default_value_t = crate::map::DEFAULT_MAX_CELLS,
+          value_parser = clap::value_parser!(u64).range(1..=crate::mapping::MAX_CELLS))]
+    pub max_cells: u64,
 }
 
 /// `beamfield log …`
@@ -153,6 +158,7 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
     let mut options = MappingOptions::new(max_range_m);
     options.resolution_m = args.resolution;
     options.margin_m = args.margin;
+    options.max_cells = args.max_cells;
     options.max_range_free_m = (args.max_range_free > 0.0).then_some(args.max_range_free);
     let progress = Progress::new("mapping");
     let built = build_from_log(&log, &options, |done, total| {

@@ -218,3 +218,44 @@ fn a_log_far_from_the_origin_builds_the_same_map_or_is_refused() {
     );
     assert!(!d.join("farther.yaml").exists());
 }
+
+#[test]
+fn map_from_log_bounds_its_grid() {
+    let d = scratch("grid");
+    // Two one-beam scans 300 m apart (a 100-byte log): 6,040 × 6,060 cells at 5 cm, 440 MB of
+    // grids to allocate; refused at the default limit, the same as `field build`'s.
+    let log = d.join("two.log");
+    std::fs::write(
+        &log,
+        "FLASER 1 1.0 0 0 0 0 0 0 0 h 0\nFLASER 1 1.0 300 300 0 300 300 0 1 h 1\n",
+    )
+    .unwrap();
+    let (log, out) = (log.display().to_string(), d.join("two.yaml"));
+    let out = out.display().to_string();
+    let base = [
+        "map",
+        "from-log",
+        log.as_str(),
+        "--max-range",
+        "5",
+        "-o",
+        out.as_str(),
+    ];
+    let o = common::run_bounded(&base, None);
+    assert_eq!(o.status.code(), Some(1), "{o:?}");
+    assert_eq!(
+        common::one_line_error(&o),
+        "error: map of 6040 × 6060 = 36602400 cells is over the limit of 16777216; use a \
+         coarser resolution (or raise the limit with --max-cells)"
+    );
+    assert!(!d.join("two.yaml").exists());
+    // --max-cells raises it, up to the builder's ceiling of 2^28 cells.
+    let mut args = base.to_vec();
+    args.extend(["--max-cells", "268435457"]);
+    let o = common::run_bounded(&args, None);
+    assert_eq!(o.status.code(), Some(2), "{o:?}");
+    let mut args = base.to_vec();
+    args.extend(["--max-cells", "36602400", "--resolution", "0.1"]);
+    let o = common::run_bounded(&args, None);
+    assert!(o.status.success(), "{o:?}");
+}

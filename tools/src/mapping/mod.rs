@@ -66,6 +66,10 @@ pub struct MappingOptions {
     pub max_range_free_m: Option<f64>,
     /// Readings at or above this are max-range readings, metres (normally the log's value).
     pub max_range_m: f32,
+    /// Largest grid built, cells (default [`crate::map::DEFAULT_MAX_CELLS`], 2²⁴, what
+    /// `field build` takes by default; at most [`MAX_CELLS`]). The builder needs about 13 bytes
+    /// per cell, and two poses 300 m apart already span 36 M cells at 5 cm.
+    pub max_cells: u64,
 }
 
 impl MappingOptions {
@@ -80,6 +84,7 @@ impl MappingOptions {
             max_log_odds: 3.5,
             max_range_free_m: Some(8.0),
             max_range_m,
+            max_cells: crate::map::DEFAULT_MAX_CELLS,
         }
     }
 
@@ -98,6 +103,7 @@ impl MappingOptions {
             && self.max_log_odds > 0.0
             && self.max_range_m.is_finite()
             && self.max_range_m > 0.0
+            && (1..=MAX_CELLS).contains(&self.max_cells)
             && self
                 .max_range_free_m
                 .is_none_or(|m| m.is_finite() && m >= 0.0);
@@ -118,12 +124,14 @@ pub enum MappingError {
     /// An option is out of range (resolution or margin ≤ 0 or not finite, increments of the
     /// wrong sign, clamps not around 0, max range not positive).
     BadOptions,
-    /// The extent at this resolution needs more than [`MAX_CELLS`] cells.
+    /// The extent at this resolution needs more than [`MappingOptions::max_cells`] cells.
     TooLarge {
         /// Cells along x.
         width: u64,
         /// Cells along y.
         height: u64,
+        /// The limit, cells.
+        max_cells: u64,
     },
     /// The map lies so far from the origin that f64 coordinates there are spaced more than
     /// [`MAX_COORDINATE_ULP_CELLS`] of a cell apart: cells could not be told apart reliably.
@@ -154,7 +162,7 @@ fn f64_spacing(m: f64) -> f64 {
     next - m
 }
 
-/// Largest grid the builder makes (2²⁸ cells, 1 GiB of log-odds).
+/// Largest [`MappingOptions::max_cells`] (2²⁸ cells, 1 GiB of log-odds, 3.2 GiB in all).
 pub const MAX_CELLS: u64 = 1 << 28;
 
 impl std::fmt::Display for MappingError {
@@ -162,9 +170,15 @@ impl std::fmt::Display for MappingError {
         match self {
             Self::NoData => f.write_str("the log has no scan with a valid reading"),
             Self::BadOptions => f.write_str("mapping options out of range"),
-            Self::TooLarge { width, height } => write!(
+            Self::TooLarge {
+                width,
+                height,
+                max_cells,
+            } => write!(
                 f,
-                "map of {width} × {height} cells is too large; use a coarser resolution"
+                "map of {width} × {height} = {} cells is over the limit of {max_cells}; use a \
+                 coarser resolution (or raise the limit with --max-cells)",
+                width.saturating_mul(*height)
             ),
             Self::Imprecise {
                 magnitude_m,
@@ -304,8 +318,12 @@ pub fn build_from_log(
     let height = ((b.y_max + options.margin_m - origin_y_m) / res)
         .ceil()
         .max(1.0) as u64;
-    if width.saturating_mul(height) > MAX_CELLS {
-        return Err(MappingError::TooLarge { width, height });
+    if width.saturating_mul(height) > options.max_cells {
+        return Err(MappingError::TooLarge {
+            width,
+            height,
+            max_cells: options.max_cells,
+        });
     }
     let magnitude_m = [
         b.x_min - options.margin_m,
