@@ -33,7 +33,7 @@ fn intel_input() -> TrackInput {
         bytes,
         params: LikelihoodParams::new(0.95, 0.05, 0.05, max_range).unwrap(),
         layout: log.layout_with_mount(SensorMount::CENTERED).unwrap(),
-        scans: log.scans.iter().map(|s| s.to_scan().unwrap()).collect(),
+        scans: log.scans.iter().map(|s| s.ranges_m.clone()).collect(),
         logged: log.scans.iter().map(|s| s.pose).collect::<Vec<Pose>>(),
     }
 }

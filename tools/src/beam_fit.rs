@@ -60,6 +60,10 @@ pub enum LambdaUpdate {
     Truncated,
 }
 
+/// Largest `fit --iterations`: 10,000 (EM stops at its tolerance within a few dozen on the
+/// shared logs; the trace holds one f64 per iteration).
+pub const MAX_FIT_ITERATIONS: u32 = 10_000;
+
 /// `beamfield fit`: EM for the beam model's intrinsics on a log.
 ///
 /// Casts z* once per beam from the logged laser poses through the blob (as the device would),
@@ -74,8 +78,8 @@ pub struct FitArgs {
     /// The CARMEN log (FLASER lines with corrected poses).
     #[arg(long)]
     pub log: PathBuf,
-    /// Largest number of EM iterations (M-steps).
-    #[arg(long, default_value_t = 100)]
+    /// Largest number of EM iterations (M-steps), at most 10,000.
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(..=i64::from(MAX_FIT_ITERATIONS)))]
     pub iterations: u32,
     /// The σ/λ update: `truncated` (monotone, unbiased λ) or `textbook` (Table 6.2).
     #[arg(long, value_enum, default_value_t = LambdaUpdate::Truncated)]
@@ -108,6 +112,8 @@ fn parse_range(s: &str) -> Result<(usize, usize), String> {
 pub enum FitError {
     /// Reading the blob file.
     Io(PathBuf, std::io::Error),
+    /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
+    Read(crate::limits::ReadError),
     /// The blob is invalid.
     Blob(PathBuf, BlobError),
     /// The blob cannot be ray cast.
@@ -120,6 +126,8 @@ pub enum FitError {
     Scans(String),
     /// `--stride 0`.
     BadStride,
+    /// `--iterations` above [`MAX_FIT_ITERATIONS`].
+    BadIterations(u32),
     /// EM refused to run.
     Em(EmError),
 }
@@ -128,12 +136,16 @@ impl std::fmt::Display for FitError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Read(e) => write!(f, "{e}"),
             Self::Blob(p, e) => write!(f, "{}: {e}", p.display()),
             Self::RayCast(e) => write!(f, "blob cannot be ray cast: {e}"),
             Self::Log(e) => write!(f, "{e}"),
             Self::Intrinsics(e) => write!(f, "start intrinsics: {e}"),
             Self::Scans(e) => write!(f, "{e}"),
             Self::BadStride => f.write_str("--stride must be >= 1"),
+            Self::BadIterations(n) => {
+                write!(f, "--iterations {n}: must be at most {MAX_FIT_ITERATIONS}")
+            }
             Self::Em(e) => write!(f, "{e}"),
         }
     }
@@ -179,6 +191,9 @@ pub fn fit_log(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<FitReport, FitError> {
     let stride = Stride::new(args.stride).ok_or(FitError::BadStride)?;
+    if args.iterations > MAX_FIT_ITERATIONS {
+        return Err(FitError::BadIterations(args.iterations));
+    }
     let max_range_m = args
         .max_range
         .or(log.max_range.value_m())
@@ -283,7 +298,12 @@ pub fn amcl_pairs(i: &BeamIntrinsics) -> [(&'static str, f32); 7] {
 /// # Errors
 /// [`FitError`].
 pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
-    let bytes = std::fs::read(&args.field).map_err(|e| FitError::Io(args.field.clone(), e))?;
+    let bytes = crate::limits::read_regular_file(
+        &args.field,
+        crate::limits::MAX_FIELD_FILE_BYTES,
+        "field file",
+    )
+    .map_err(FitError::Read)?;
     let view = crate::field_cmd::parse_field_file(&bytes)
         .map_err(|e| FitError::Blob(args.field.clone(), e))?;
     let t_read = Instant::now();

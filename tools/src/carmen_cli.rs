@@ -51,6 +51,11 @@ pub struct FromLogArgs {
     /// Skip malformed lines (they are counted and reported) instead of stopping at the first.
     #[arg(long)]
     pub skip_bad_lines: bool,
+    /// Refuse a map of more cells than this (the builder needs about 13 bytes per cell; the
+    /// Intel map is 0.78 M cells); at most 268,435,456.
+    #[arg(long = "max-cells", default_value_t = crate::map::DEFAULT_MAX_CELLS,
+          value_parser = clap::value_parser!(u64).range(1..=crate::mapping::MAX_CELLS))]
+    pub max_cells: u64,
 }
 
 /// `beamfield log …`
@@ -134,6 +139,12 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
     for bad in &log.bad_lines {
         eprintln!("skipped {bad}");
     }
+    if log.bad_line_count > log.bad_lines.len() {
+        eprintln!(
+            "skipped {} more malformed lines",
+            log.bad_line_count - log.bad_lines.len()
+        );
+    }
     let Some(max_range_m) = log.max_range.value_m() else {
         return fail(format!(
             "{}: no max-range value could be detected (no single value dominates the top of the \
@@ -147,6 +158,7 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
     let mut options = MappingOptions::new(max_range_m);
     options.resolution_m = args.resolution;
     options.margin_m = args.margin;
+    options.max_cells = args.max_cells;
     options.max_range_free_m = (args.max_range_free > 0.0).then_some(args.max_range_free);
     let progress = Progress::new("mapping");
     let built = build_from_log(&log, &options, |done, total| {
@@ -165,7 +177,7 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
         let trajectory: Vec<(f64, f64)> = log
             .scans
             .iter()
-            .map(|s| (f64::from(s.pose.x_m), f64::from(s.pose.y_m)))
+            .map(|s| (s.pose_f64.x_m, s.pose_f64.y_m))
             .collect();
         if let Err(e) = write_png(&grid, &trajectory, png) {
             return fail(e);
@@ -189,6 +201,7 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
                 "max_range_free_m": options.max_range_free_m,
                 "readings": stats,
                 "bad_lines": log.bad_lines.iter().map(ToString::to_string).collect::<Vec<_>>(),
+                "bad_lines_total": log.bad_line_count,
             })
         );
     } else {
@@ -217,8 +230,8 @@ fn map_from_log(args: &FromLogArgs, json: bool) -> ExitCode {
         if let Some(png) = &args.png {
             println!("picture: {}", png.display());
         }
-        if !log.bad_lines.is_empty() {
-            println!("{} malformed lines skipped", log.bad_lines.len());
+        if log.bad_line_count > 0 {
+            println!("{} malformed lines skipped", log.bad_line_count);
         }
     }
     ExitCode::SUCCESS
@@ -258,6 +271,7 @@ fn log_info(args: &LogInfoArgs, json: bool) -> ExitCode {
                 "bad_lines": log.bad_lines.iter().map(|e| serde_json::json!({
                     "line": e.line, "error": e.to_string(),
                 })).collect::<Vec<_>>(),
+                "bad_lines_total": log.bad_line_count,
             })
         );
     } else {
@@ -326,14 +340,15 @@ fn print_info(path: &Path, log: &CarmenLog, s: &LogStats) {
     );
     let params: Vec<String> = log.params.iter().map(|(k, v)| format!("{k}={v}")).collect();
     println!("params: {}", params.join(", "));
-    println!("bad lines: {}", log.bad_lines.len());
+    println!("bad lines: {}", log.bad_line_count);
     for e in log.bad_lines.iter().take(20) {
         println!("  {e}");
     }
-    if log.bad_lines.len() > 20 {
+    if log.bad_line_count > 20 {
         println!(
-            "  … and {} more (use --json for all)",
-            log.bad_lines.len() - 20
+            "  … and {} more (use --json for the first {})",
+            log.bad_line_count - 20,
+            crate::carmen::MAX_BAD_LINES_KEPT
         );
     }
 }

@@ -137,6 +137,15 @@ pub enum FieldCmdError {
     Map(MapError),
     /// A file could not be read or written.
     Io(PathBuf, std::io::Error),
+    /// A field file that is not a regular file, or larger than
+    /// [`crate::limits::MAX_FIELD_FILE_BYTES`].
+    Read(crate::limits::ReadError),
+    /// A `field query` input line longer than [`crate::limits::MAX_QUERY_LINE_BYTES`] (its
+    /// 1-based number); reading stops there.
+    QueryLineTooLong(usize),
+    /// `field encode` of a blob with more cells than [`MAX_DECODED_CELLS`] (the file, width,
+    /// height).
+    TooManyCells(PathBuf, u32, u32),
     /// The blob is invalid, or could not be written.
     Blob(PathBuf, BlobError),
     /// The distance transform refused the grid.
@@ -168,6 +177,19 @@ impl std::fmt::Display for FieldCmdError {
         match self {
             Self::Map(e) => write!(f, "{e}"),
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Read(e) => write!(f, "{e}"),
+            Self::TooManyCells(p, w, h) => write!(
+                f,
+                "{}: a field of {w} x {h} = {} cells, more than {MAX_DECODED_CELLS}, the most a \
+                 field is decoded to",
+                p.display(),
+                u64::from(*w) * u64::from(*h)
+            ),
+            Self::QueryLineTooLong(n) => write!(
+                f,
+                "standard input line {n}: longer than {} bytes (stopped reading)",
+                crate::limits::MAX_QUERY_LINE_BYTES
+            ),
             Self::Blob(p, e) => write!(f, "{}: {e}", p.display()),
             Self::Edt(e) => write!(f, "distance transform: {e}"),
             Self::BadMaxDist(d) => write!(f, "--max-dist {d}: must be finite and > 0"),
@@ -348,6 +370,9 @@ pub fn build_blob_clamped(
 /// encoding cannot record the clamp).
 pub fn untile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
     let view = parse_field_file(blob)?;
+    if !decodable(&view) {
+        return Err(BlobError::TooLarge);
+    }
     if view.clamp_code().is_some() {
         return Err(BlobError::BadClamp);
     }
@@ -356,6 +381,17 @@ pub fn untile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
     let mut out = vec![0u8; header.required_len()?];
     beamfield::field::emit_blob(&header, &codes, &mut out)?;
     Ok(out)
+}
+
+/// Most cells `field encode` decodes a blob to: as many as a raw blob within
+/// [`crate::limits::MAX_FIELD_FILE_BYTES`] holds (134,217,728). A tiled blob stores 16 cells in
+/// 2 bytes of tile index, so a tiled file within the limit could announce 8 times more; decoding
+/// and re-encoding costs about 3 bytes per cell.
+pub const MAX_DECODED_CELLS: u64 = crate::limits::MAX_FIELD_FILE_BYTES;
+
+/// `view` has at most [`MAX_DECODED_CELLS`] cells.
+fn decodable(view: &FieldView<'_>) -> bool {
+    u64::from(view.width()) * u64::from(view.height()) <= MAX_DECODED_CELLS
 }
 
 /// Every code of a view, row-major from the lowest y.
@@ -387,6 +423,9 @@ pub fn tile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
 /// half a code step, or at or above `d_max` (see [`clamp_code_for`]).
 pub fn tile_blob_clamped(blob: &[u8], clamp_m: Option<f32>) -> Result<Vec<u8>, BlobError> {
     let view = parse_field_file(blob)?;
+    if !decodable(&view) {
+        return Err(BlobError::TooLarge);
+    }
     let header = *view.header();
     let codes = codes_of(&view);
     let asked = match clamp_m {
@@ -466,26 +505,56 @@ impl BlobInfo {
 pub struct QueryReport {
     /// Lines answered.
     pub answered: usize,
-    /// Malformed lines reported.
+    /// Malformed lines reported (not numbers, not UTF-8).
     pub bad: usize,
+    /// The 1-based number of a line longer than [`crate::limits::MAX_QUERY_LINE_BYTES`], where
+    /// reading stopped (the rest of such a line may never end: `/dev/zero`).
+    pub too_long: Option<usize>,
 }
 
-/// Answers "x,y" lines from `input` on `out`; reports malformed lines (1-based line numbers)
-/// on `err`. Blank lines and lines starting with `#` are ignored.
+/// Answers "x,y" lines from `input` on `out`; reports malformed lines (1-based line numbers,
+/// the line quoted as an escaped prefix of at most [`crate::limits::QUOTE_CHARS`] characters)
+/// on `err`. Blank lines and lines starting with `#` are ignored. A line longer than
+/// [`crate::limits::MAX_QUERY_LINE_BYTES`] stops the reading ([`QueryReport::too_long`]):
+/// nothing of it past the limit is read or kept.
 ///
 /// # Errors
 /// I/O errors of the streams.
 pub fn run_query(
     view: &FieldView<'_>,
-    input: impl BufRead,
+    mut input: impl BufRead,
     mut out: impl Write,
     mut err: impl Write,
     json: bool,
 ) -> std::io::Result<QueryReport> {
+    use crate::limits::{escaped_prefix, read_bounded_line, BoundedLine, QUOTE_CHARS};
     let mut report = QueryReport::default();
-    for (i, line) in input.lines().enumerate() {
-        let line = line?;
-        let t = line.trim();
+    let mut buf = Vec::new();
+    let mut number = 0usize;
+    while let Some(line) =
+        read_bounded_line(&mut input, &mut buf, crate::limits::MAX_QUERY_LINE_BYTES)?
+    {
+        number += 1;
+        let t = match line {
+            BoundedLine::Text(t) => t.trim(),
+            BoundedLine::TooLong => {
+                report.too_long = Some(number);
+                break;
+            }
+            BoundedLine::NotUtf8 => {
+                report.bad += 1;
+                if json {
+                    writeln!(
+                        err,
+                        "{}",
+                        serde_json::json!({ "line": number, "error": "not UTF-8 text" })
+                    )?;
+                } else {
+                    writeln!(err, "line {number}: not UTF-8 text")?;
+                }
+                continue;
+            }
+        };
         if t.is_empty() || t.starts_with('#') {
             continue;
         }
@@ -505,14 +574,15 @@ pub fn run_query(
             }
             Err(why) => {
                 report.bad += 1;
+                let quoted = escaped_prefix(t, QUOTE_CHARS);
                 if json {
                     writeln!(
                         err,
                         "{}",
-                        serde_json::json!({ "line": i + 1, "error": why, "text": t })
+                        serde_json::json!({ "line": number, "error": why, "text": quoted })
                     )?;
                 } else {
-                    writeln!(err, "line {}: {why}: {t:?}", i + 1)?;
+                    writeln!(err, "line {number}: {why}: \"{quoted}\"")?;
                 }
             }
         }
@@ -572,8 +642,14 @@ pub fn parse_field_file(bytes: &[u8]) -> Result<FieldView<'_>, BlobError> {
     }
 }
 
-fn read_blob(path: &Path) -> Result<Vec<u8>, FieldCmdError> {
-    std::fs::read(path).map_err(|e| FieldCmdError::Io(path.to_path_buf(), e))
+/// Reads a field file (blob and optional free-space section): a regular file of at most
+/// [`crate::limits::MAX_FIELD_FILE_BYTES`].
+///
+/// # Errors
+/// [`FieldCmdError::Read`].
+pub fn read_field_file(path: &Path) -> Result<Vec<u8>, FieldCmdError> {
+    crate::limits::read_regular_file(path, crate::limits::MAX_FIELD_FILE_BYTES, "field file")
+        .map_err(FieldCmdError::Read)
 }
 
 /// Runs a `field` subcommand; prints a summary (JSON with `json`).
@@ -596,17 +672,12 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                 return Err(FieldCmdError::ClampNeedsTiled);
             }
             let t0 = Instant::now();
-            let m = load_map_limited(&map, max_cells).map_err(FieldCmdError::Map)?;
-            let loaded = variants
-                .iter()
-                .map(|p| {
-                    Ok((
-                        p.clone(),
-                        load_map_limited(p, max_cells).map_err(FieldCmdError::Map)?,
-                    ))
-                })
-                .collect::<Result<Vec<_>, FieldCmdError>>()?;
-            let m = union_map(&m, &loaded)?;
+            let mut m = load_map_limited(&map, max_cells).map_err(FieldCmdError::Map)?;
+            // One variant at a time: memory does not grow with the number of variants.
+            for p in &variants {
+                let v = load_map_limited(p, max_cells).map_err(FieldCmdError::Map)?;
+                m = union_map(&m, &[(p.clone(), v)])?;
+            }
             let t1 = Instant::now();
             let mut blob = match clamp_m {
                 Some(d) => build_blob_clamped(&m, max_dist, d)?,
@@ -678,9 +749,16 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             encoding,
             clamp_m,
         } => {
-            let bytes = read_blob(&blob)?;
+            let bytes = read_field_file(&blob)?;
             let view =
                 parse_field_file(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
+            if !decodable(&view) {
+                return Err(FieldCmdError::TooManyCells(
+                    blob,
+                    view.width(),
+                    view.height(),
+                ));
+            }
             if encoding == Encoding::Raw && (clamp_m.is_some() || view.clamp_code().is_some()) {
                 return Err(FieldCmdError::ClampNeedsTiled);
             }
@@ -730,7 +808,7 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             Ok(())
         }
         FieldCommand::Info { blob } => {
-            let bytes = read_blob(&blob)?;
+            let bytes = read_field_file(&blob)?;
             let info = BlobInfo::of(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
             let h = info.header;
             if json {
@@ -790,7 +868,7 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
             Ok(())
         }
         FieldCommand::Query { blob } => {
-            let bytes = read_blob(&blob)?;
+            let bytes = read_field_file(&blob)?;
             let view = parse_field_file(&bytes).map_err(|e| FieldCmdError::Blob(blob, e))?;
             let stdin = std::io::stdin();
             let report = run_query(
@@ -801,14 +879,16 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                 json,
             )
             .map_err(|e| FieldCmdError::Io(PathBuf::from("<stdio>"), e))?;
-            if report.bad > 0 {
+            if let Some(n) = report.too_long {
+                Err(FieldCmdError::QueryLineTooLong(n))
+            } else if report.bad > 0 {
                 Err(FieldCmdError::BadLines(report.bad))
             } else {
                 Ok(())
             }
         }
         FieldCommand::Render { blob, output } => {
-            let bytes = read_blob(&blob)?;
+            let bytes = read_field_file(&blob)?;
             let view =
                 parse_field_file(&bytes).map_err(|e| FieldCmdError::Blob(blob.clone(), e))?;
             let name = blob.file_name().map_or_else(

@@ -74,6 +74,26 @@ pub fn field_image(view: &FieldView<'_>) -> image::RgbImage {
     })
 }
 
+/// Largest picture drawn, pixels: 2²⁵ (33.5 M, about 100 MB of RGB). The field of a map within
+/// `field build`'s default `--max-cells` (4096 × 4096) is drawn one pixel per cell in
+/// 4228 × 4244 pixels; a blob of 2²⁴ × 1 cells would need 2.5 G pixels.
+pub const MAX_PICTURE_PIXELS: u64 = 1 << 25;
+
+/// Refuses a picture of more than [`MAX_PICTURE_PIXELS`].
+///
+/// # Errors
+/// [`PlotError`] naming the size and the limit.
+pub fn check_picture_size(width_px: u32, height_px: u32) -> Result<(), PlotError> {
+    let px = u64::from(width_px) * u64::from(height_px);
+    if px > MAX_PICTURE_PIXELS {
+        return Err(PlotError(format!(
+            "a picture of {width_px} x {height_px} = {px} pixels is over the limit of \
+             {MAX_PICTURE_PIXELS}"
+        )));
+    }
+    Ok(())
+}
+
 /// Draws `view` to the PNG `path` with the title `title`.
 ///
 /// # Errors
@@ -90,6 +110,7 @@ pub fn draw_field(
     // Room for the title, the axes' labels and the key line under the x axis.
     let (left, right, top, bottom) = (92u32, 40u32, 58u32, 90u32);
     let (width_px, height_px) = (plot_w + left + right, plot_h + top + bottom);
+    check_picture_size(width_px, height_px)?;
     let hd = view.header();
     let cell = f64::from(hd.cell_size_m);
     let (ox, oy) = (f64::from(hd.origin_x_m), f64::from(hd.origin_y_m));

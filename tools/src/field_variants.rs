@@ -13,6 +13,10 @@ use clap::Args;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// Most `--variant` maps `score-variants` takes: 16. Every variant is held with its field (about
+/// 2 bytes per cell), so 16 maps at the default cell limit (16.8 M cells) stay near 540 MB.
+pub const MAX_SCORE_VARIANTS: usize = 16;
+
 /// Beam capacity of the scans read (CARMEN FLASER scans have 180 or 361 beams).
 pub const MAX_BEAMS: usize = 1081;
 
@@ -64,6 +68,8 @@ pub struct ScoreVariantsArgs {
 pub enum ScoreVariantsError {
     /// Fewer than two variants.
     TooFewVariants(usize),
+    /// More than [`MAX_SCORE_VARIANTS`] variants.
+    TooManyVariants(usize),
     /// A variant could not be loaded, or its field built.
     Field(FieldCmdError),
     /// The log could not be read.
@@ -78,6 +84,11 @@ impl std::fmt::Display for ScoreVariantsError {
             Self::TooFewVariants(n) => {
                 write!(f, "{n} variant(s) given: pass at least two --variant maps")
             }
+            Self::TooManyVariants(n) => write!(
+                f,
+                "{n} variants given: at most {MAX_SCORE_VARIANTS} (each is held in memory with \
+                 its field)"
+            ),
             Self::Field(e) => write!(f, "{e}"),
             Self::Log(e) => write!(f, "{e}"),
             Self::Usage(m) => f.write_str(m),
@@ -196,6 +207,9 @@ pub fn run_score_variants(a: &ScoreVariantsArgs, json: bool) -> Result<String, S
     if a.variants.len() < 2 {
         return Err(ScoreVariantsError::TooFewVariants(a.variants.len()));
     }
+    if a.variants.len() > MAX_SCORE_VARIANTS {
+        return Err(ScoreVariantsError::TooManyVariants(a.variants.len()));
+    }
     if !(a.max_dist.is_finite() && a.max_dist > 0.0) {
         return Err(ScoreVariantsError::Field(FieldCmdError::BadMaxDist(
             a.max_dist,
@@ -209,7 +223,7 @@ pub fn run_score_variants(a: &ScoreVariantsArgs, json: bool) -> Result<String, S
     }
     let mut maps = Vec::with_capacity(a.variants.len());
     for p in &a.variants {
-        eprintln!("score-variants: loading {}", p.display());
+        crate::progress::note(&format!("score-variants: loading {}", p.display()));
         let m = load_map_limited(p, DEFAULT_MAX_CELLS)
             .map_err(|e| ScoreVariantsError::Field(FieldCmdError::Map(e)))?;
         maps.push((name_of(p), m));
@@ -241,10 +255,10 @@ pub fn run_score_variants(a: &ScoreVariantsArgs, json: bool) -> Result<String, S
         Some(t) => parse_pose(t)?,
         None => s.pose,
     };
-    eprintln!(
+    crate::progress::note(&format!(
         "score-variants: one distance transform per variant ({} variants)",
         maps.len()
-    );
+    ));
     let v = score_variants(&maps, a.max_dist, params, &layout, &scan, &pose, a.margin)?;
     let mut out = String::new();
     if json {

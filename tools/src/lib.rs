@@ -6,6 +6,7 @@ pub mod calibrate;
 pub mod heat_map;
 pub mod info;
 pub mod lidar_cmd;
+pub mod limits;
 pub mod overlay;
 pub mod plot;
 pub mod pose_grid;

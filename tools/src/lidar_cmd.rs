@@ -24,6 +24,10 @@ pub const MAX_BEAMS: usize = 360;
 /// Points per revolution written by the encoders (1° apart).
 pub const POINTS_PER_REV: usize = 360;
 
+/// Largest `lidar encode --garbage`, bytes: 1 MiB (a real sensor sends a few hundred bytes
+/// before its first frame).
+pub const MAX_GARBAGE_BYTES: usize = 1 << 20;
+
 /// A sensor protocol.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Format {
@@ -85,6 +89,13 @@ pub enum LidarCmdError {
     BadOption(String),
     /// The picture could not be drawn.
     Plot(PlotError),
+    /// The capture is longer than [`crate::limits::MAX_CAPTURE_BYTES`].
+    CaptureTooLarge(PathBuf),
+    /// The capture holds more than [`crate::limits::MAX_DECODED_SCANS`] scans.
+    TooManyScans,
+    /// The stream `lidar encode` would write is longer than
+    /// [`crate::limits::MAX_CAPTURE_BYTES`] (what `lidar decode` reads).
+    StreamTooLarge,
 }
 
 impl std::fmt::Display for LidarCmdError {
@@ -97,6 +108,23 @@ impl std::fmt::Display for LidarCmdError {
             Self::Encode(e) => write!(f, "encoder: {e}"),
             Self::BadOption(s) => f.write_str(s),
             Self::Plot(e) => write!(f, "{e}"),
+            Self::CaptureTooLarge(p) => write!(
+                f,
+                "{} is larger than {} bytes, the limit for a LiDAR capture",
+                p.display(),
+                crate::limits::MAX_CAPTURE_BYTES
+            ),
+            Self::StreamTooLarge => write!(
+                f,
+                "the stream would be larger than {} bytes, the limit for a LiDAR capture \
+                 (encode fewer --scans)",
+                crate::limits::MAX_CAPTURE_BYTES
+            ),
+            Self::TooManyScans => write!(
+                f,
+                "the capture holds more than {} scans, the limit for one decode",
+                crate::limits::MAX_DECODED_SCANS
+            ),
         }
     }
 }
@@ -234,6 +262,9 @@ pub fn encode_scans<const N: usize>(
         }
         .map_err(LidarCmdError::Encode)?;
         out.extend_from_slice(&frames[..n]);
+        if out.len() as u64 > crate::limits::MAX_CAPTURE_BYTES {
+            return Err(LidarCmdError::StreamTooLarge);
+        }
         if options.format == Format::Ydlidar {
             prev = Some(rev.clone());
         }
@@ -396,39 +427,150 @@ pub struct Decoded {
     pub assembler: AssemblerStats,
 }
 
+/// A decoder and an assembler fed a stream chunk by chunk, keeping at most `max_scans` scans.
+pub struct StreamDecoder<const N: usize> {
+    decoder: AnyDecoder,
+    assembler: ScanAssembler<N>,
+    scans: Vec<Vec<f32>>,
+    revolutions: Vec<Revolution>,
+    max_scans: usize,
+    overflow: bool,
+}
+
+impl<const N: usize> StreamDecoder<N> {
+    /// A decoder for `format` assembling on `layout`, keeping at most `max_scans` scans.
+    ///
+    /// # Errors
+    /// [`LidarCmdError::Assembler`] for a layout the assembler cannot bin.
+    pub fn new(
+        format: Format,
+        layout: &BeamLayout<N>,
+        config: AssemblerConfig,
+        max_scans: usize,
+    ) -> Result<Self, LidarCmdError> {
+        Ok(Self {
+            decoder: AnyDecoder::new(format),
+            assembler: ScanAssembler::new(layout, config).map_err(LidarCmdError::Assembler)?,
+            scans: Vec::new(),
+            revolutions: Vec::new(),
+            max_scans,
+            overflow: false,
+        })
+    }
+
+    /// Feeds `bytes` (`None`: the end of the stream) and keeps the scans completed.
+    fn run(&mut self, bytes: Option<&[u8]>) -> Result<(), LidarCmdError> {
+        let Self {
+            decoder,
+            assembler,
+            scans,
+            revolutions,
+            max_scans,
+            overflow,
+        } = self;
+        let mut keep = |assembler: &ScanAssembler<N>| {
+            if scans.len() >= *max_scans {
+                *overflow = true;
+            } else {
+                scans.push(assembler.scan().ranges_m().to_vec());
+                revolutions.push(assembler.revolution());
+            }
+        };
+        let mut on_point = |p| {
+            if assembler.push(p).is_some() {
+                keep(assembler);
+            }
+        };
+        match bytes {
+            Some(b) => decoder.feed(b, &mut on_point),
+            None => {
+                decoder.finish(&mut on_point);
+                if assembler.finish().is_some() {
+                    keep(assembler);
+                }
+            }
+        }
+        if *overflow {
+            Err(LidarCmdError::TooManyScans)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Feeds the next bytes of the stream.
+    ///
+    /// # Errors
+    /// [`LidarCmdError::TooManyScans`] once more than `max_scans` scans were assembled.
+    pub fn feed(&mut self, bytes: &[u8]) -> Result<(), LidarCmdError> {
+        self.run(Some(bytes))
+    }
+
+    /// The end of the stream: what the decoder held back, and the last, unfinished revolution.
+    ///
+    /// # Errors
+    /// [`LidarCmdError::TooManyScans`].
+    pub fn finish(mut self) -> Result<Decoded, LidarCmdError> {
+        self.run(None)?;
+        Ok(Decoded {
+            decoder: self.decoder.stats(),
+            assembler: self.assembler.stats(),
+            scans: self.scans,
+            revolutions: self.revolutions,
+        })
+    }
+}
+
 /// Decodes `bytes` in `format` and assembles the points on `layout` (the last, unfinished
 /// revolution is emitted too).
 ///
 /// # Errors
-/// [`LidarCmdError::Assembler`] for a layout the assembler cannot bin.
+/// [`LidarCmdError::Assembler`] for a layout the assembler cannot bin,
+/// [`LidarCmdError::TooManyScans`] past [`crate::limits::MAX_DECODED_SCANS`].
 pub fn decode_stream<const N: usize>(
     format: Format,
     layout: &BeamLayout<N>,
     config: AssemblerConfig,
     bytes: &[u8],
 ) -> Result<Decoded, LidarCmdError> {
-    let mut decoder = AnyDecoder::new(format);
-    let mut assembler = ScanAssembler::new(layout, config).map_err(LidarCmdError::Assembler)?;
-    let mut scans = Vec::new();
-    let mut revolutions = Vec::new();
-    let mut on_point = |p| {
-        if assembler.push(p).is_some() {
-            scans.push(assembler.scan().ranges_m().to_vec());
-            revolutions.push(assembler.revolution());
+    let mut d = StreamDecoder::new(format, layout, config, crate::limits::MAX_DECODED_SCANS)?;
+    d.feed(bytes)?;
+    d.finish()
+}
+
+/// Decodes the capture at `path` (a file, a FIFO or a device: read as a stream, in chunks, never
+/// held whole) in `format` on `layout`; returns the scans and the number of bytes read.
+///
+/// # Errors
+/// [`LidarCmdError::Io`], [`LidarCmdError::CaptureTooLarge`] past `max_bytes`,
+/// [`LidarCmdError::TooManyScans`] past `max_scans`, [`LidarCmdError::Assembler`].
+pub fn decode_path<const N: usize>(
+    path: &Path,
+    format: Format,
+    layout: &BeamLayout<N>,
+    config: AssemblerConfig,
+    max_bytes: u64,
+    max_scans: usize,
+) -> Result<(Decoded, u64), LidarCmdError> {
+    use std::io::Read;
+    let io = |e| LidarCmdError::Io(path.to_path_buf(), e);
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut d = StreamDecoder::new(format, layout, config, max_scans)?;
+    let mut chunk = vec![0u8; 64 * 1024];
+    let mut total = 0u64;
+    loop {
+        let n = match file.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(io(e)),
+        };
+        total += n as u64;
+        if total > max_bytes {
+            return Err(LidarCmdError::CaptureTooLarge(path.to_path_buf()));
         }
-    };
-    decoder.feed(bytes, &mut on_point);
-    decoder.finish(&mut on_point);
-    if assembler.finish().is_some() {
-        scans.push(assembler.scan().ranges_m().to_vec());
-        revolutions.push(assembler.revolution());
+        d.feed(chunk.get(..n).unwrap_or(&[]))?;
     }
-    Ok(Decoded {
-        scans,
-        revolutions,
-        decoder: decoder.stats(),
-        assembler: assembler.stats(),
-    })
+    Ok((d.finish()?, total))
 }
 
 /// The beams a decoded stream is assembled on.
@@ -497,8 +639,9 @@ pub struct EncodeArgs {
     /// Standard deviation of Gaussian range noise, metres.
     #[arg(long, default_value_t = 0.0, value_name = "M")]
     pub noise: f32,
-    /// Random start-up bytes before the first frame.
-    #[arg(long, default_value_t = 0, value_name = "BYTES")]
+    /// Random start-up bytes before the first frame (at most 1 MiB).
+    #[arg(long, default_value_t = 0, value_name = "BYTES",
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(0..=MAX_GARBAGE_BYTES as u64))]
     pub garbage: usize,
     /// Probability that a byte gets one random bit flipped.
     #[arg(long, default_value_t = 0.0, value_name = "RATE")]
@@ -557,7 +700,7 @@ pub fn run(command: &LidarCommand, json: bool) -> Result<String, LidarCmdError> 
 }
 
 fn run_encode(a: &EncodeArgs, json: bool) -> Result<String, LidarCmdError> {
-    eprintln!("reading {} …", a.log.display());
+    crate::progress::note(&format!("reading {} …", a.log.display()));
     let log = CarmenLog::read_path(&a.log, ReadOptions::default()).map_err(LidarCmdError::Log)?;
     let layout: BeamLayout<MAX_BEAMS> = log
         .layout_with_mount(SensorMount::CENTERED)
@@ -578,7 +721,7 @@ fn run_encode(a: &EncodeArgs, json: bool) -> Result<String, LidarCmdError> {
     let total = scans.len();
     let (bytes, report) = encode_scans(&layout, &scans, &options, |k| {
         if k % 200 == 0 || k == total {
-            eprintln!("encoded {k}/{total} scans");
+            crate::progress::note(&format!("encoded {k}/{total} scans"));
         }
     })?;
     std::fs::write(&a.output, &bytes).map_err(|e| LidarCmdError::Io(a.output.clone(), e))?;
@@ -639,7 +782,6 @@ fn assembler_json(a: &AssemblerStats) -> serde_json::Value {
 }
 
 fn run_decode(a: &DecodeArgs, json: bool) -> Result<String, LidarCmdError> {
-    let bytes = std::fs::read(&a.stream).map_err(|e| LidarCmdError::Io(a.stream.clone(), e))?;
     let max_range = a.max_range.unwrap_or(a.format.field_max_m() + 1.0);
     let layout = layout(a.layout, max_range)?;
     let config = AssemblerConfig {
@@ -648,8 +790,15 @@ fn run_decode(a: &DecodeArgs, json: bool) -> Result<String, LidarCmdError> {
         min_quality: a.min_quality,
         ..AssemblerConfig::for_layout(&layout)
     };
-    eprintln!("decoding {} bytes …", bytes.len());
-    let d = decode_stream(a.format, &layout, config, &bytes)?;
+    crate::progress::note(&format!("decoding {} …", a.stream.display()));
+    let (d, bytes) = decode_path(
+        &a.stream,
+        a.format,
+        &layout,
+        config,
+        crate::limits::MAX_CAPTURE_BYTES,
+        crate::limits::MAX_DECODED_SCANS,
+    )?;
     if let Some(path) = &a.output {
         let k = a.scan.unwrap_or(d.scans.len().saturating_sub(1));
         let ranges = d.scans.get(k).ok_or_else(|| {
@@ -692,7 +841,7 @@ fn run_decode(a: &DecodeArgs, json: bool) -> Result<String, LidarCmdError> {
             .collect();
         return Ok(serde_json::json!({
             "format": a.format.name(),
-            "bytes": bytes.len(),
+            "bytes": bytes,
             "decoder": stats_json(&d.decoder),
             "assembler": assembler_json(&d.assembler),
             "scans": scans,
@@ -706,7 +855,7 @@ fn run_decode(a: &DecodeArgs, json: bool) -> Result<String, LidarCmdError> {
          {} points: {} binned, {} flagged invalid, {} out of range, {} low quality, {} outside the layout, {} replaced\n\
          {} scans ({} revolutions missed)",
         a.format.name(),
-        bytes.len(),
+        bytes,
         s.frames_ok,
         s.bad_checksum,
         s.bad_frames,

@@ -17,6 +17,10 @@ use std::path::{Path, PathBuf};
 /// Beam capacity of the scans these commands read (CARMEN FLASER scans have 180 or 361).
 pub const MAX_BEAMS: usize = 1081;
 
+/// Most scores `calibrate` keeps (scans × grid poses, one f64 each): 2²⁵, 256 MiB. The
+/// default grid (41 × 41 × 41 poses) over the default 60 scans is 4.1 M.
+pub const MAX_CALIBRATE_SCORES: u64 = 1 << 25;
+
 /// Likelihood-field parameters shared by both commands.
 #[derive(Args, Debug, Clone)]
 pub struct ModelArgs {
@@ -120,6 +124,8 @@ pub struct CalibrateArgs {
 pub enum ScoreCmdError {
     /// The blob could not be read.
     Io(PathBuf, std::io::Error),
+    /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
+    Read(crate::limits::ReadError),
     /// The blob is malformed.
     Blob(beamfield::field::BlobError),
     /// The log could not be read.
@@ -134,6 +140,7 @@ impl std::fmt::Display for ScoreCmdError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Read(e) => write!(f, "{e}"),
             Self::Blob(e) => write!(f, "bad field blob: {e}"),
             Self::Log(e) => write!(f, "{e}"),
             Self::Usage(m) => f.write_str(m),
@@ -156,7 +163,12 @@ struct Loaded {
 }
 
 fn load(m: &ModelArgs) -> Result<Loaded, ScoreCmdError> {
-    let blob = std::fs::read(&m.field).map_err(|e| ScoreCmdError::Io(m.field.clone(), e))?;
+    let blob = crate::limits::read_regular_file(
+        &m.field,
+        crate::limits::MAX_FIELD_FILE_BYTES,
+        "field file",
+    )
+    .map_err(ScoreCmdError::Read)?;
     crate::field_cmd::parse_field_file(&blob).map_err(ScoreCmdError::Blob)?;
     let options = ReadOptions {
         max_range_m: m.max_range,
@@ -530,6 +542,15 @@ pub fn run_calibrate(a: &CalibrateArgs, json: bool) -> Result<String, ScoreCmdEr
         ));
     }
     let l = load(&a.model)?;
+    let n = a.scans.min(l.log.scans.len());
+    let scores = (n as u64).saturating_mul(spec.len() as u64);
+    if scores > MAX_CALIBRATE_SCORES {
+        return Err(usage(format!(
+            "{n} scans of {} grid poses = {scores} scores, over the limit of \
+             {MAX_CALIBRATE_SCORES} (fewer --scans or a coarser grid)",
+            spec.len()
+        )));
+    }
     let lf = LikelihoodField::new(
         crate::field_cmd::parse_field_file(&l.blob).map_err(ScoreCmdError::Blob)?,
         l.params,

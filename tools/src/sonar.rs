@@ -95,7 +95,14 @@ pub struct LoadedRing {
 /// # Errors
 /// A message naming the file and the problem.
 pub fn load_ring(path: &Path) -> Result<LoadedRing, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let bytes = crate::limits::read_regular_file(
+        path,
+        crate::limits::MAX_TEXT_FILE_BYTES,
+        "ring description",
+    )
+    .map_err(|e| e.to_string())?;
+    let text =
+        String::from_utf8(bytes).map_err(|_| format!("{}: not UTF-8 text", path.display()))?;
     let spec: RingSpec = toml::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
     ring_from_spec(&spec).map_err(|e| format!("{}: {e}", path.display()))
 }

@@ -114,14 +114,14 @@ impl fmt::Display for LineError {
                 f.write_str("FLASER without a beam count")
             }
             LineErrorKind::BadBeamCount { token } => {
-                write!(f, "beam count {token:?} is not a positive integer")
+                write!(f, "beam count \"{token}\" is not a positive integer")
             }
             LineErrorKind::BeamCountMismatch { first, found } => write!(
                 f,
                 "FLASER has {found} beams but the first scan of the log has {first}"
             ),
             LineErrorKind::BadNumber { field, token } => {
-                write!(f, "{field}: {token:?} is not a finite number")
+                write!(f, "{field}: \"{token}\" is not a finite number")
             }
             LineErrorKind::BadParam => f.write_str("PARAM line without a name and a value"),
             LineErrorKind::TooLong => {
@@ -149,6 +149,14 @@ pub enum LogError {
     Line(LineError),
     /// A `robot_frontlaser_offset` or given max range that is not finite, or a max range ≤ 0.
     BadOption(&'static str),
+    /// The log file is longer than [`crate::limits::MAX_LOG_BYTES`].
+    TooLarge {
+        /// The file.
+        path: std::path::PathBuf,
+    },
+    /// The log holds more of something than the reader keeps (scans, PARAM lines, message
+    /// types): what, and the limit.
+    TooMany(&'static str, usize),
 }
 
 impl fmt::Display for LogError {
@@ -161,6 +169,18 @@ impl fmt::Display for LogError {
             Self::Io { path: None, source } => write!(f, "cannot read log: {source}"),
             Self::Line(e) => e.fmt(f),
             Self::BadOption(what) => f.write_str(what),
+            Self::TooLarge { path } => write!(
+                f,
+                "{} is larger than {} bytes, the limit for a CARMEN log",
+                path.display(),
+                crate::limits::MAX_LOG_BYTES
+            ),
+            Self::TooMany(what, limit) => {
+                write!(
+                    f,
+                    "the log has more than {limit} {what}, the limit for a log"
+                )
+            }
         }
     }
 }
@@ -170,7 +190,7 @@ impl std::error::Error for LogError {
         match self {
             Self::Io { source, .. } => Some(source),
             Self::Line(e) => Some(e),
-            Self::BadOption(_) => None,
+            Self::BadOption(_) | Self::TooLarge { .. } | Self::TooMany(..) => None,
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Parsing one FLASER line.
 
 use super::error::{Field, LineError, LineErrorKind};
-use super::{LaserScan, FLASER_TRAILER_TOKENS};
+use super::{printable, LaserScan, PoseF64, FLASER_TRAILER_TOKENS};
 use beamfield::Pose;
 
 pub(super) fn parse_finite<T>(token: &str, field: Field, line: usize) -> Result<T, LineError>
@@ -14,7 +14,7 @@ where
             line,
             kind: LineErrorKind::BadNumber {
                 field,
-                token: token.to_string(),
+                token: printable(token),
             },
         }),
     }
@@ -31,7 +31,7 @@ pub(super) fn parse_flaser<'a>(
         Ok(n) if n > 0 => n,
         _ => {
             return Err(err(LineErrorKind::BadBeamCount {
-                token: n_token.to_string(),
+                token: printable(n_token),
             }))
         }
     };
@@ -56,7 +56,7 @@ pub(super) fn parse_flaser<'a>(
         let v = t.parse::<f32>().map_err(|_| {
             err(LineErrorKind::BadNumber {
                 field: Field::Range(i),
-                token: (*t).to_string(),
+                token: printable(t),
             })
         })?;
         ranges_m.push(v);
@@ -69,9 +69,17 @@ pub(super) fn parse_flaser<'a>(
         Field::OdomY,
         Field::OdomTheta,
     ];
-    let mut pose = [0.0f32; 6];
+    // In f64: a pose far from the origin keeps its sub-millimetre digits (an f32 at 1e9 m is
+    // 64 m apart from the next one); the f32 poses are rounded from these.
+    let mut pose = [0.0f64; 6];
     for ((slot, field), token) in pose.iter_mut().zip(fields).zip(trailer) {
-        *slot = parse_finite::<f32>(token, field, line)?;
+        *slot = parse_finite::<f64>(token, field.clone(), line)?;
+        if !(*slot as f32).is_finite() {
+            return Err(err(LineErrorKind::BadNumber {
+                field,
+                token: printable(token),
+            }));
+        }
     }
     let [x, y, th, ox, oy, oth] = pose;
     let (ipc, logger) = match trailer {
@@ -90,8 +98,13 @@ pub(super) fn parse_flaser<'a>(
     };
     Ok(LaserScan {
         ranges_m,
-        pose: Pose::new(x, y, th),
-        odom_pose: Pose::new(ox, oy, oth),
+        pose: Pose::new(x as f32, y as f32, th as f32),
+        odom_pose: Pose::new(ox as f32, oy as f32, oth as f32),
+        pose_f64: PoseF64 {
+            x_m: x,
+            y_m: y,
+            theta_rad: th,
+        },
         timestamp_s: ipc,
         logger_timestamp_s: logger,
         line,

@@ -62,6 +62,9 @@ pub struct LaserScan {
     pub pose: Pose,
     /// The robot's pose (`odom_x odom_y odom_theta`), metres and radians.
     pub odom_pose: Pose,
+    /// The laser's pose as parsed, in f64 ([`LaserScan::pose`] is it rounded to f32): what the
+    /// map builder projects beams from, so that a log far from the origin keeps its precision.
+    pub pose_f64: PoseF64,
     /// The ipc timestamp, seconds. Not necessarily increasing (the Intel log steps back 4 times).
     pub timestamp_s: f64,
     /// The logger timestamp, seconds.
@@ -79,16 +82,36 @@ impl LaserScan {
         Scan::from_ranges(&self.ranges_m)
     }
 
-    /// World-frame end point of beam `i` (metres), in f64, or `None` past the last beam.
-    /// Uses the CARMEN bearing `−π/2 + i·π/n`; max-range readings are projected like any other.
+    /// World-frame end point of beam `i` (metres), in f64 from the f64 pose
+    /// ([`LaserScan::pose_f64`]), or `None` past the last beam. Uses the CARMEN bearing
+    /// `−π/2 + i·π/n`; max-range readings are projected like any other.
     pub fn endpoint(&self, i: usize) -> Option<(f64, f64)> {
         let n = self.ranges_m.len();
         let r = f64::from(*self.ranges_m.get(i)?);
-        let a = f64::from(self.pose.theta_rad) + carmen_bearing_rad(i, n);
-        Some((
-            f64::from(self.pose.x_m) + r * a.cos(),
-            f64::from(self.pose.y_m) + r * a.sin(),
-        ))
+        let p = self.pose_f64;
+        let a = p.theta_rad + carmen_bearing_rad(i, n);
+        Some((p.x_m + r * a.cos(), p.y_m + r * a.sin()))
+    }
+}
+
+/// A pose in f64 (metres, metres, radians).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PoseF64 {
+    /// x, metres.
+    pub x_m: f64,
+    /// y, metres.
+    pub y_m: f64,
+    /// θ, radians.
+    pub theta_rad: f64,
+}
+
+impl From<Pose> for PoseF64 {
+    fn from(p: Pose) -> Self {
+        Self {
+            x_m: f64::from(p.x_m),
+            y_m: f64::from(p.y_m),
+            theta_rad: f64::from(p.theta_rad),
+        }
     }
 }
 
@@ -143,7 +166,7 @@ const MAX_NAME_CHARS: usize = 64;
 /// `s` as it may be printed: unchanged if it is at most [`MAX_NAME_CHARS`] of printable ASCII,
 /// else escaped (`\u{1b}`, `\0`, …) and cut at [`MAX_NAME_CHARS`] characters with `…`. A
 /// terminal never receives a control byte from the log.
-fn printable(s: &str) -> String {
+pub(crate) fn printable(s: &str) -> String {
     if s.len() <= MAX_NAME_CHARS && s.bytes().all(|b| b.is_ascii_graphic()) {
         return s.to_string();
     }
@@ -203,6 +226,18 @@ fn next_line<'a, R: BufRead>(
     }))
 }
 
+/// Malformed lines kept in [`CarmenLog::bad_lines`] (the others are counted only).
+pub const MAX_BAD_LINES_KEPT: usize = 1000;
+/// Most FLASER scans a log may have: 1,048,576 (the Intel log has 910; a 40 Hz laser logs about
+/// 7 hours in as many). More is [`LogError::TooMany`].
+pub const MAX_LOG_SCANS: usize = 1 << 20;
+/// Most PARAM lines a log may have (a CARMEN log has a few hundred). More is
+/// [`LogError::TooMany`].
+pub const MAX_LOG_PARAMS: usize = 10_000;
+/// Most distinct other message types a log may have (ODOM, NEFF, RLASER, …). More is
+/// [`LogError::TooMany`].
+pub const MAX_LOG_MESSAGE_TYPES: usize = 1000;
+
 /// A read log.
 #[derive(Clone, Debug, Default)]
 pub struct CarmenLog {
@@ -218,8 +253,11 @@ pub struct CarmenLog {
     pub comments: usize,
     /// Blank lines.
     pub blank_lines: usize,
-    /// Malformed lines, when read with [`ReadOptions::skip_bad_lines`].
+    /// Malformed lines, when read with [`ReadOptions::skip_bad_lines`]: the first
+    /// [`MAX_BAD_LINES_KEPT`] of them ([`CarmenLog::bad_line_count`] counts them all).
     pub bad_lines: Vec<LineError>,
+    /// Malformed lines in all (when read with [`ReadOptions::skip_bad_lines`]).
+    pub bad_line_count: usize,
     /// The max-range value: given, detected or not found.
     pub max_range: MaxRange,
 }
@@ -231,12 +269,25 @@ impl CarmenLog {
     /// [`LogError::Io`] when the file cannot be read, [`LogError::Line`] for the first malformed
     /// line (unless [`ReadOptions::skip_bad_lines`]), [`LogError::BadOption`] for a given max
     /// range that is not finite and positive.
+    ///
+    /// At most [`crate::limits::MAX_LOG_BYTES`] are read: a longer file (or a FIFO or device
+    /// that does not end, such as `/dev/zero`) is [`LogError::TooLarge`], whatever its lines.
     pub fn read_path(path: &Path, options: ReadOptions) -> Result<Self, LogError> {
+        use std::io::Read;
         let file = std::fs::File::open(path).map_err(|source| LogError::Io {
             path: Some(path.to_path_buf()),
             source,
         })?;
-        Self::read(std::io::BufReader::new(file), options).map_err(|e| match e {
+        let mut reader =
+            std::io::BufReader::new(file.take(crate::limits::MAX_LOG_BYTES.saturating_add(1)));
+        let read = Self::read(&mut reader, options);
+        // More than the limit was there: the file is too large, whatever a cut line says.
+        if reader.get_ref().limit() == 0 {
+            return Err(LogError::TooLarge {
+                path: path.to_path_buf(),
+            });
+        }
+        read.map_err(|e| match e {
             LogError::Io { path: None, source } => LogError::Io {
                 path: Some(path.to_path_buf()),
                 source,
@@ -268,7 +319,7 @@ impl CarmenLog {
             };
             number += 1;
             let parsed = match line {
-                Line::Text(text) => log.parse_line(text, number),
+                Line::Text(text) => log.parse_line(text, number)?,
                 Line::TooLong => Err(LineError {
                     line: number,
                     kind: LineErrorKind::TooLong,
@@ -280,7 +331,10 @@ impl CarmenLog {
             };
             if let Err(e) = parsed {
                 if options.skip_bad_lines {
-                    log.bad_lines.push(e);
+                    log.bad_line_count += 1;
+                    if log.bad_lines.len() < MAX_BAD_LINES_KEPT {
+                        log.bad_lines.push(e);
+                    }
                 } else {
                     return Err(LogError::Line(e));
                 }
@@ -294,16 +348,46 @@ impl CarmenLog {
         Ok(log)
     }
 
-    fn parse_line(&mut self, line: &str, number: usize) -> Result<(), LineError> {
+    /// Parses one line into the log; the outer error is a limit of the whole log, the inner
+    /// one a malformed line.
+    fn parse_line(&mut self, line: &str, number: usize) -> Result<Result<(), LineError>, LogError> {
         let mut tokens = line.split_whitespace();
         let Some(kind) = tokens.next() else {
             self.blank_lines += 1;
-            return Ok(());
+            return Ok(Ok(()));
         };
         if kind.starts_with('#') {
             self.comments += 1;
-            return Ok(());
+            return Ok(Ok(()));
         }
+        match kind {
+            "FLASER" if self.scans.len() >= MAX_LOG_SCANS => {
+                return Err(LogError::TooMany("FLASER scans", MAX_LOG_SCANS))
+            }
+            "PARAM" if self.params.len() >= MAX_LOG_PARAMS => {
+                return Err(LogError::TooMany("PARAM lines", MAX_LOG_PARAMS))
+            }
+            "FLASER" | "PARAM" => {}
+            other
+                if self.skipped.len() >= MAX_LOG_MESSAGE_TYPES
+                    && !self.skipped.contains_key(&printable(other)) =>
+            {
+                return Err(LogError::TooMany(
+                    "distinct message types",
+                    MAX_LOG_MESSAGE_TYPES,
+                ))
+            }
+            _ => {}
+        }
+        Ok(self.parse_message(kind, tokens, number))
+    }
+
+    fn parse_message<'a>(
+        &mut self,
+        kind: &str,
+        mut tokens: impl Iterator<Item = &'a str>,
+        number: usize,
+    ) -> Result<(), LineError> {
         match kind {
             "FLASER" => {
                 let first_n = self.scans.first().map(|s| s.ranges_m.len());

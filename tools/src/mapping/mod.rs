@@ -66,6 +66,10 @@ pub struct MappingOptions {
     pub max_range_free_m: Option<f64>,
     /// Readings at or above this are max-range readings, metres (normally the log's value).
     pub max_range_m: f32,
+    /// Largest grid built, cells (default [`crate::map::DEFAULT_MAX_CELLS`], 2²⁴, what
+    /// `field build` takes by default; at most [`MAX_CELLS`]). The builder needs about 13 bytes
+    /// per cell, and two poses 300 m apart already span 36 M cells at 5 cm.
+    pub max_cells: u64,
 }
 
 impl MappingOptions {
@@ -80,6 +84,7 @@ impl MappingOptions {
             max_log_odds: 3.5,
             max_range_free_m: Some(8.0),
             max_range_m,
+            max_cells: crate::map::DEFAULT_MAX_CELLS,
         }
     }
 
@@ -98,6 +103,7 @@ impl MappingOptions {
             && self.max_log_odds > 0.0
             && self.max_range_m.is_finite()
             && self.max_range_m > 0.0
+            && (1..=MAX_CELLS).contains(&self.max_cells)
             && self
                 .max_range_free_m
                 .is_none_or(|m| m.is_finite() && m >= 0.0);
@@ -110,7 +116,7 @@ impl MappingOptions {
 }
 
 /// Errors building a map.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum MappingError {
     /// The log has no scan with a valid reading.
@@ -118,16 +124,45 @@ pub enum MappingError {
     /// An option is out of range (resolution or margin ≤ 0 or not finite, increments of the
     /// wrong sign, clamps not around 0, max range not positive).
     BadOptions,
-    /// The extent at this resolution needs more than [`MAX_CELLS`] cells.
+    /// The extent at this resolution needs more than [`MappingOptions::max_cells`] cells.
     TooLarge {
         /// Cells along x.
         width: u64,
         /// Cells along y.
         height: u64,
+        /// The limit, cells.
+        max_cells: u64,
+    },
+    /// The map lies so far from the origin that f64 coordinates there are spaced more than
+    /// [`MAX_COORDINATE_ULP_CELLS`] of a cell apart: cells could not be told apart reliably.
+    Imprecise {
+        /// The largest coordinate magnitude of the map (its extent with the margin), metres.
+        magnitude_m: f64,
+        /// The spacing of f64 values at that magnitude, metres.
+        spacing_m: f64,
+        /// The resolution asked for, metres.
+        resolution_m: f64,
     },
 }
 
-/// Largest grid the builder makes (2²⁸ cells, 1 GiB of log-odds).
+/// Largest spacing of f64 coordinates allowed at the map's farthest point, as a fraction of
+/// a cell: 1/1024. The builder computes cells from world coordinates in f64
+/// (`(x − origin) / resolution`), so a coordinate is off by up to this spacing; at 1/1024 of
+/// a cell, only end points within a thousandth of a cell from a cell edge can land in the
+/// neighbouring cell. At 0.05 m cells this allows coordinates up to 2³⁸ m (2.7·10¹¹ m).
+pub const MAX_COORDINATE_ULP_CELLS: f64 = 1.0 / 1024.0;
+
+/// The spacing of f64 values at magnitude `m` (its unit in the last place).
+fn f64_spacing(m: f64) -> f64 {
+    let m = m.abs();
+    if !m.is_finite() {
+        return f64::INFINITY;
+    }
+    let next = f64::from_bits(m.to_bits() + 1);
+    next - m
+}
+
+/// Largest [`MappingOptions::max_cells`] (2²⁸ cells, 1 GiB of log-odds, 3.2 GiB in all).
 pub const MAX_CELLS: u64 = 1 << 28;
 
 impl std::fmt::Display for MappingError {
@@ -135,9 +170,25 @@ impl std::fmt::Display for MappingError {
         match self {
             Self::NoData => f.write_str("the log has no scan with a valid reading"),
             Self::BadOptions => f.write_str("mapping options out of range"),
-            Self::TooLarge { width, height } => write!(
+            Self::TooLarge {
+                width,
+                height,
+                max_cells,
+            } => write!(
                 f,
-                "map of {width} × {height} cells is too large; use a coarser resolution"
+                "map of {width} × {height} = {} cells is over the limit of {max_cells}; use a \
+                 coarser resolution (or raise the limit with --max-cells)",
+                width.saturating_mul(*height)
+            ),
+            Self::Imprecise {
+                magnitude_m,
+                spacing_m,
+                resolution_m,
+            } => write!(
+                f,
+                "poses and end points reach {magnitude_m:e} m from the origin, where f64 \
+                 coordinates are {spacing_m:e} m apart: more than 1/1024 of a {resolution_m} m \
+                 cell; move the log nearer the origin or use a coarser resolution"
             ),
         }
     }
@@ -221,9 +272,10 @@ type Segment = ((f64, f64), (f64, f64), bool);
 fn beam_segment(scan: &LaserScan, i: usize, options: &MappingOptions) -> Option<Segment> {
     let z = *scan.ranges_m.get(i)?;
     let n = scan.ranges_m.len();
-    let a = f64::from(scan.pose.theta_rad) + crate::carmen::carmen_bearing_rad(i, n);
+    let p = scan.pose_f64;
+    let a = p.theta_rad + crate::carmen::carmen_bearing_rad(i, n);
     let (s, c) = a.sin_cos();
-    let start = (f64::from(scan.pose.x_m), f64::from(scan.pose.y_m));
+    let start = (p.x_m, p.y_m);
     let (length, hit) = match Reading::classify(z, options.max_range_m) {
         Reading::Range(z) => (f64::from(z), true),
         Reading::MaxRange => (options.max_range_free_m?, false),
@@ -247,7 +299,7 @@ pub fn build_from_log(
     // Extent: every pose, every end point and every capped max-range ray end.
     let mut extent = Extent::default();
     for scan in &log.scans {
-        extent.add(f64::from(scan.pose.x_m), f64::from(scan.pose.y_m));
+        extent.add(scan.pose_f64.x_m, scan.pose_f64.y_m);
         for i in 0..scan.ranges_m.len() {
             if let Some((_, end, _)) = beam_segment(scan, i, options) {
                 extent.add(end.0, end.1);
@@ -266,8 +318,30 @@ pub fn build_from_log(
     let height = ((b.y_max + options.margin_m - origin_y_m) / res)
         .ceil()
         .max(1.0) as u64;
-    if width.saturating_mul(height) > MAX_CELLS {
-        return Err(MappingError::TooLarge { width, height });
+    if width.saturating_mul(height) > options.max_cells {
+        return Err(MappingError::TooLarge {
+            width,
+            height,
+            max_cells: options.max_cells,
+        });
+    }
+    let magnitude_m = [
+        b.x_min - options.margin_m,
+        b.x_max + options.margin_m,
+        b.y_min - options.margin_m,
+        b.y_max + options.margin_m,
+        origin_x_m,
+        origin_y_m,
+    ]
+    .iter()
+    .fold(0.0f64, |m, v| m.max(v.abs()));
+    let spacing_m = f64_spacing(magnitude_m);
+    if spacing_m > res * MAX_COORDINATE_ULP_CELLS {
+        return Err(MappingError::Imprecise {
+            magnitude_m,
+            spacing_m,
+            resolution_m: res,
+        });
     }
     let geometry = GridGeometry {
         width: width as usize,
@@ -395,6 +469,7 @@ mod tests {
                     ranges_m: ranges.clone(),
                     pose: *pose,
                     odom_pose: *pose,
+                    pose_f64: (*pose).into(),
                     timestamp_s: k as f64,
                     logger_timestamp_s: k as f64,
                     line: k + 1,

@@ -14,6 +14,8 @@ pub(super) fn draw_track(
     scans: usize,
 ) -> Result<(), TrackError> {
     let (view, _) = input.views()?;
+    crate::field_figure::check_picture_size(view.width(), view.height())
+        .map_err(|e| TrackError::Png(path.to_path_buf(), e.0))?;
     let base = field_image(&view);
     let scale = 1u32;
     let img = image::imageops::resize(

@@ -24,6 +24,8 @@ use std::path::PathBuf;
 
 /// Largest `--particles`.
 pub const MAX_TRACK_PARTICLES: usize = 20_000;
+/// Largest `--seeds`: 1,000 runs (each a whole pass over the log; the docs' studies use 20).
+pub const MAX_TRACK_SEEDS: u64 = 1000;
 /// XOR applied to the seed for the odometry generator.
 pub const ODOMETRY_SEED_XOR: u64 = 0x6F64_6F6D_6574_7279;
 /// XOR applied to the seed for the kidnapping's wrong pose.
@@ -72,14 +74,17 @@ pub struct TrackArgs {
     /// The CARMEN log (FLASER lines with corrected poses).
     #[arg(long)]
     pub log: PathBuf,
-    /// Number of particles.
-    #[arg(long, default_value_t = 500)]
+    /// Number of particles (1 to 20,000).
+    #[arg(long, default_value_t = 500,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_TRACK_PARTICLES as u64))]
     pub particles: usize,
     /// Tempering κ (8.25 is the value `beamfield calibrate` finds on the Intel log).
     #[arg(long, default_value_t = 8.25)]
     pub kappa: f32,
-    /// Score every S-th beam.
-    #[arg(long, default_value_t = 1)]
+    /// Score every S-th beam (1 to 1081, the most beams a scan has here).
+    #[arg(long, default_value_t = 1,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new()
+              .range(1..=crate::score_cmd::MAX_BEAMS as u64))]
     pub stride: usize,
     /// Odometry noise odom_alpha1..4 (variance coefficients, AMCL's convention), used both to
     /// synthesize the odometry and in the filter: "A" or "A1,A2,A3,A4".
@@ -88,8 +93,8 @@ pub struct TrackArgs {
     /// Seed of the run (see the module docs for the generators).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Run this many seeds (SEED, SEED+1, …) and report min / median / max.
-    #[arg(long, default_value_t = 1)]
+    /// Run this many seeds (SEED, SEED+1, …; 1 to 1,000) and report min / median / max.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=MAX_TRACK_SEEDS))]
     pub seeds: u64,
     /// Initial cloud.
     #[arg(long, value_enum, default_value_t = Init::Logged)]
@@ -144,6 +149,8 @@ pub struct TrackArgs {
 pub enum TrackError {
     /// A file could not be read or written.
     Io(PathBuf, std::io::Error),
+    /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
+    Read(crate::limits::ReadError),
     /// The distance-field blob is malformed.
     Blob(BlobError),
     /// The free-space section after the blob is malformed.
@@ -162,6 +169,7 @@ impl std::fmt::Display for TrackError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Read(e) => write!(f, "{e}"),
             Self::Blob(e) => write!(f, "bad field blob: {e}"),
             Self::FreeSpace(e) => write!(f, "bad free-space section: {e}"),
             Self::Log(e) => write!(f, "{e}"),
@@ -256,8 +264,11 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
         args.z_rand,
         args.sigma_hit,
     )?;
-    if args.seeds == 0 {
-        return Err(usage("--seeds must be at least 1"));
+    if !(1..=MAX_TRACK_SEEDS).contains(&args.seeds) {
+        return Err(usage(format!(
+            "--seeds {}: must be 1 ..= {MAX_TRACK_SEEDS}",
+            args.seeds
+        )));
     }
     if let Some(k) = args.kidnap {
         if k == 0 || k >= input.scans.len() {
@@ -269,7 +280,8 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
     }
     let from = args.kidnap.unwrap_or(0);
     let mut runs = Vec::new();
-    for seed in args.seed..args.seed + args.seeds {
+    // SEED, SEED+1, … wrapping past u64::MAX (the seed is only a generator's state).
+    for seed in (0..args.seeds).map(|i| args.seed.wrapping_add(i)) {
         let o = options(args, seed, input.scans.len())?;
         let r = run_once(&input, &o)?;
         if runs.is_empty() {

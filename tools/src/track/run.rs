@@ -25,8 +25,9 @@ pub struct TrackInput {
     pub params: LikelihoodParams,
     /// The log's beam layout (centred mount).
     pub layout: BeamLayout<MAX_BEAMS>,
-    /// The scans.
-    pub scans: Vec<Scan<MAX_BEAMS>>,
+    /// The scans' ranges (each made a [`Scan`] when it is scored: a `Scan<MAX_BEAMS>` holds
+    /// 4.3 KB whatever its beams, so a log of many short scans is not multiplied in memory).
+    pub scans: Vec<Vec<f32>>,
     /// The logged (corrected) laser poses: the truth.
     pub logged: Vec<Pose>,
 }
@@ -60,7 +61,9 @@ pub fn load(
     z_rand: f32,
     sigma_hit: f32,
 ) -> Result<TrackInput, TrackError> {
-    let bytes = std::fs::read(field).map_err(|e| TrackError::Io(field.to_path_buf(), e))?;
+    let bytes =
+        crate::limits::read_regular_file(field, crate::limits::MAX_FIELD_FILE_BYTES, "field file")
+            .map_err(TrackError::Read)?;
     let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
     let max_range = log
         .max_range
@@ -71,16 +74,15 @@ pub fn load(
     let layout = log
         .layout_with_mount(SensorMount::CENTERED)
         .map_err(|e| usage(format!("beam layout of the log: {e}")))?;
-    let scans = log
-        .scans
-        .iter()
-        .map(|s| s.to_scan())
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| usage(format!("scan: {e}")))?;
-    if scans.is_empty() {
+    if let Some(s) = log.scans.first() {
+        // Every scan has the first one's beams (the reader enforces it).
+        s.to_scan::<MAX_BEAMS>()
+            .map_err(|e| usage(format!("scan: {e}")))?;
+    } else {
         return Err(usage("no FLASER scans in the log"));
     }
     let logged = log.scans.iter().map(|s| s.pose).collect();
+    let scans = log.scans.into_iter().map(|s| s.ranges_m).collect();
     let input = TrackInput {
         bytes,
         params,
@@ -375,7 +377,8 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
                 kidnap(&mut mcl, f, &truth, &mut kidnap_rng);
             }
         }
-        let scan = &input.scans[k];
+        let scan = &Scan::<MAX_BEAMS>::from_ranges(&input.scans[k])
+            .map_err(|e| usage(format!("scan {k}: {e}")))?;
         let result = match o.weighting {
             Weighting::Product => {
                 let prepared = model.prepare(&input.layout, scan);
