@@ -12,6 +12,7 @@
 #[rustfmt::skip]
 pub mod fixed_cases;
 pub mod reference_cases;
+pub mod size_program;
 pub mod usart;
 
 use core::fmt;
@@ -173,6 +174,17 @@ pub fn exit(ok: bool) -> ! {
 #[inline(never)]
 pub extern "C" fn bench_mark_start() {
     cortex_m::asm::nop();
+}
+
+/// Names the next measured region and starts it: prints
+/// [`beamfield_fixtures::regions::NAME_LINE`] and `name` (a name of
+/// [`beamfield_fixtures::regions`]), then calls [`bench_mark_start`]. `cargo xtask` pairs the
+/// names with the plugin's counts in order and takes the counts by name. Inlined, so the
+/// region's code is the same as with a bare [`bench_mark_start`].
+#[inline(always)]
+pub fn start_region(name: &str) {
+    println!("{}{}", beamfield_fixtures::regions::NAME_LINE, name);
+    bench_mark_start();
 }
 
 /// Marks the end of a measured region; see [`bench_mark_start`].
