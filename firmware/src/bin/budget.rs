@@ -136,7 +136,7 @@ fn region<M: SensorModel<BEAMS>>(name: &str, c: &Ctx<'_>, model: &M, stride: Str
     let layout = black_box(&c.layout);
     let scan = black_box(&c.scan);
     let poses = black_box(&c.poses);
-    start_region(name);
+    start_region!(name);
     let mut sum = 0.0f32;
     for pose in poses {
         sum += model
@@ -152,7 +152,7 @@ fn region<M: SensorModel<BEAMS>>(name: &str, c: &Ctx<'_>, model: &M, stride: Str
 fn prepared_region(name: &str, prepared: &PreparedScan<'_, BEAMS>, poses: &[Pose; POSES]) -> f32 {
     let prepared = black_box(prepared);
     let poses = black_box(poses);
-    start_region(name);
+    start_region!(name);
     let mut sum = 0.0f32;
     for pose in poses {
         sum += prepared.score(pose).log_likelihood;
@@ -260,7 +260,7 @@ fn main() -> ! {
             .log_likelihood;
     }
     let w = black_box(&mut weights);
-    start_region(budget::NORMALIZE.name);
+    start_region!(budget::NORMALIZE.name);
     let norm = normalize_log_weights(w);
     bench_mark_end();
     let beam = region(budget::BEAM.name, &ctx, &ctx.beam, Stride::ONE);

@@ -119,7 +119,7 @@ fn decode_assemble_region<D, const N: usize>(
 where
     D: beamfield::lidar::StreamDecoder + Default,
 {
-    start_region(region);
+    start_region!(region);
     let mut dec = D::default();
     let mut asm = beamfield::lidar::ScanAssembler::new(layout, config).ok()?;
     let mut scans = 0u32;
@@ -169,14 +169,14 @@ fn lidar_regions() -> Option<[usize; 4]> {
     }
     let ld06_len = n;
     let stream = black_box(buf.get(..n)?);
-    start_region(insns::EMPTY_BYTES.name);
+    start_region!(insns::EMPTY_BYTES.name);
     let mut sum = 0u32;
     for &b in stream {
         sum = sum.wrapping_add(u32::from(b));
     }
     bench_mark_end();
     let sum = black_box(sum);
-    start_region(insns::LD06_DECODE.name);
+    start_region!(insns::LD06_DECODE.name);
     let mut dec = Ld06Decoder::new();
     let mut pts = 0u32;
     dec.feed(stream, |p| {
@@ -317,7 +317,7 @@ fn beam_model_with_ray_casting() -> Option<(f32, usize)> {
     }
     let scans = black_box(&scans);
 
-    start_region(insns::BEAM_RAY_CAST.name);
+    start_region!(insns::BEAM_RAY_CAST.name);
     let mut sum = 0.0f32;
     let mut scored = 0usize;
     for (scan, pose) in scans.iter().flatten() {
@@ -345,7 +345,7 @@ fn tiled_regions(
     let prepared: [PreparedScan<'_, { real::BEAMS }>; REAL_SCANS] =
         core::array::from_fn(|i| field.prepare(layout, black_box(&scans[i % REAL_SCANS])));
 
-    start_region(insns::LF_PREPARED_TILED.name);
+    start_region!(insns::LF_PREPARED_TILED.name);
     let mut sum = 0.0f32;
     for (prep, ps) in prepared.iter().zip(poses) {
         for p in ps {
@@ -354,7 +354,7 @@ fn tiled_regions(
     }
     bench_mark_end();
 
-    start_region(insns::LF_PREPARED_NO_BEAMS_TILED.name);
+    start_region!(insns::LF_PREPARED_NO_BEAMS_TILED.name);
     let mut overhead = 0.0f32;
     for ps in poses {
         for p in ps {
@@ -383,7 +383,7 @@ fn main() -> ! {
     let ranges = black_box(scan.ranges_m());
     let finite = |z: f32| if z < MAX_RANGE_M { z } else { MAX_RANGE_M };
 
-    start_region(insns::EMPTY_LOOP.name);
+    start_region!(insns::EMPTY_LOOP.name);
     let mut sum = 0.0f32;
     for &z in ranges {
         sum += black_box(finite(z));
@@ -391,7 +391,7 @@ fn main() -> ! {
     bench_mark_end();
     let empty = sum;
 
-    start_region(insns::LN.name);
+    start_region!(insns::LN.name);
     let mut sum = 0.0f32;
     for &z in ranges {
         sum += math::ln(black_box(finite(z)));
@@ -399,7 +399,7 @@ fn main() -> ! {
     bench_mark_end();
     let ln_sum = sum;
 
-    start_region(insns::EXP.name);
+    start_region!(insns::EXP.name);
     let mut sum = 0.0f32;
     for &z in ranges {
         sum += math::exp(-black_box(finite(z)));
@@ -407,7 +407,7 @@ fn main() -> ! {
     bench_mark_end();
     let exp_sum = sum;
 
-    start_region(insns::BEAM_MIXTURE.name);
+    start_region!(insns::BEAM_MIXTURE.name);
     let score = model.scan_log_likelihood(black_box(&scan), black_box(&z_star[..]));
     bench_mark_end();
 
@@ -453,14 +453,14 @@ fn main() -> ! {
     };
     let empty_prep = field.prepare(&layout, &no_return);
 
-    start_region(insns::LF_PREPARE.name);
+    start_region!(insns::LF_PREPARE.name);
     let prepared: [PreparedScan<'_, { real::BEAMS }>; REAL_SCANS] =
         core::array::from_fn(|i| field.prepare(&layout, black_box(&scans[i % REAL_SCANS])));
     bench_mark_end();
     let kept: usize = prepared.iter().map(PreparedScan::len).sum();
     let evaluations = kept * POSES_PER_SCAN;
 
-    start_region(insns::EMPTY_PREPARED.name);
+    start_region!(insns::EMPTY_PREPARED.name);
     let mut acc = 0i32;
     for (prep, ps) in prepared.iter().zip(&poses) {
         for p in ps {
@@ -473,7 +473,7 @@ fn main() -> ! {
     bench_mark_end();
     let empty_real = black_box(acc);
 
-    start_region(insns::LF_PREPARED.name);
+    start_region!(insns::LF_PREPARED.name);
     let mut lf_sum = 0.0f32;
     for (prep, ps) in prepared.iter().zip(&poses) {
         for p in ps {
@@ -482,7 +482,7 @@ fn main() -> ! {
     }
     bench_mark_end();
 
-    start_region(insns::LF_PREPARED_NO_BEAMS.name);
+    start_region!(insns::LF_PREPARED_NO_BEAMS.name);
     let mut overhead_sum = 0.0f32;
     for ps in &poses {
         for p in ps {
@@ -491,7 +491,7 @@ fn main() -> ! {
     }
     bench_mark_end();
 
-    start_region(insns::LF_PER_POSE.name);
+    start_region!(insns::LF_PER_POSE.name);
     let mut old_sum = 0.0f32;
     for (scan, ps) in scans.iter().zip(&poses) {
         for p in ps {

@@ -240,7 +240,7 @@ fn main() -> ! {
         }
         // Decode and assemble between the counting markers; the scans finished in the chunk
         // are scored after the region.
-        start_region(lidar::DECODE_ASSEMBLE.name);
+        start_region!(lidar::DECODE_ASSEMBLE.name);
         decode_chunk(&mut decoder, &mut assembler, chunk, &mut queue);
         bench_mark_end();
         regions += 1;
@@ -258,13 +258,13 @@ fn main() -> ! {
         // the main path, and so its count.
         #[cfg(feature = "decode-split")]
         {
-            start_region(lidar::DECODE_ALONE.name);
+            start_region!(lidar::DECODE_ALONE.name);
             decode_only_points += decode_alone(&mut decode_only, chunk);
             bench_mark_end();
             regions += 1;
         }
         // The baseline of the same run: a table-driven CRC-32 over the same bytes.
-        start_region(lidar::CRC.name);
+        start_region!(lidar::CRC.name);
         crc_chunk(&mut digest, chunk);
         bench_mark_end();
         regions += 1;
@@ -273,7 +273,7 @@ fn main() -> ! {
         chunks += 1;
     }
     // The end of the recording: the pending revolution.
-    start_region(lidar::FINISH.name);
+    start_region!(lidar::FINISH.name);
     let last = assembler.finish().is_some();
     bench_mark_end();
     regions += 1;

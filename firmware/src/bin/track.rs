@@ -73,7 +73,7 @@ fn main() -> ! {
         SEED,
     );
     let mark = |m: Mark| match m {
-        Mark::Start(name) => start_region(name),
+        Mark::Start(name) => start_region!(name),
         Mark::End => bench_mark_end(),
     };
     match run(
