@@ -12,6 +12,7 @@
 #[rustfmt::skip]
 pub mod fixed_cases;
 pub mod reference_cases;
+pub mod size_program;
 pub mod usart;
 
 use core::fmt;
@@ -173,6 +174,23 @@ pub fn exit(ok: bool) -> ! {
 #[inline(never)]
 pub extern "C" fn bench_mark_start() {
     cortex_m::asm::nop();
+}
+
+/// Names the next measured region and starts it: prints
+/// `beamfield_fixtures::regions::NAME_LINE` and the name (a name of
+/// `beamfield_fixtures::regions`), then calls [`bench_mark_start`]. `cargo xtask` pairs the
+/// names with the plugin's counts in order and takes the counts by name.
+///
+/// A macro, not a function of this library: only the programs that name regions then link
+/// the fixtures crate. Linked into every program, its unused code changes what the optimizer
+/// inlines under LTO, and so the flash and instruction figures of programs that have nothing
+/// to do with it (the size programs of `cargo xtask budgets`).
+#[macro_export]
+macro_rules! start_region {
+    ($name:expr) => {{
+        $crate::println!("{}{}", beamfield_fixtures::regions::NAME_LINE, $name);
+        $crate::bench_mark_start();
+    }};
 }
 
 /// Marks the end of a measured region; see [`bench_mark_start`].

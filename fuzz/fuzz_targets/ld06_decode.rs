@@ -1,7 +1,7 @@
 //! Fuzzes the LD06 decoder and the assembler behind it: fuzz bytes become LD06 frames with a
 //! correct CRC (so mutations reach the fields: angles, distances, timestamps), raw runs and cut
 //! frames; about half the frames have their speed and angles pinned plausible
-//! (`lidar_common::ld06_pin_plausible`), the rest stay random; see `lidar_common.rs` for what is
+//! (`lidar_common::ld06_pin_plausible`), the rest stay random; see `fuzz/src/lidar_common.rs` for what is
 //! checked.
 //!
 //! Run: `cargo +nightly fuzz run ld06_decode` from the repository root.
@@ -11,8 +11,7 @@
 use beamfield::lidar::ld06::{self, Ld06Decoder};
 use libfuzzer_sys::fuzz_target;
 
-#[path = "lidar_common.rs"]
-mod lidar_common;
+use beamfield_fuzz::lidar_common;
 
 fuzz_target!(|data: &[u8]| {
     let (sizes, body) = data.split_at(data.len().min(4));

@@ -1,6 +1,6 @@
 //! Fuzzes the RPLIDAR decoder and the assembler behind it: fuzz bytes become scan nodes with the
 //! start/inverse-start flags and the check bit set right (so mutations reach angles, distances
-//! and quality), descriptors and responses, raw runs and cut nodes; see `lidar_common.rs`.
+//! and quality), descriptors and responses, raw runs and cut nodes; see `fuzz/src/lidar_common.rs`.
 //!
 //! Run: `cargo +nightly fuzz run rplidar_decode` from the repository root.
 
@@ -9,8 +9,7 @@
 use beamfield::lidar::rplidar::{self, RplidarDecoder, RplidarNode};
 use libfuzzer_sys::fuzz_target;
 
-#[path = "lidar_common.rs"]
-mod lidar_common;
+use beamfield_fuzz::lidar_common;
 
 fuzz_target!(|data: &[u8]| {
     let (sizes, body) = data.split_at(data.len().min(4));

@@ -1,6 +1,6 @@
 //! Fuzzes the XV-11 decoder and the assembler behind it: fuzz bytes become packets with a
 //! correct checksum and a valid index (so mutations reach the readings and flags), raw runs and
-//! cut packets; see `lidar_common.rs` for what is checked.
+//! cut packets; see `fuzz/src/lidar_common.rs` for what is checked.
 //!
 //! Run: `cargo +nightly fuzz run xv11_decode` from the repository root.
 
@@ -9,8 +9,7 @@
 use beamfield::lidar::xv11::{self, Xv11Decoder};
 use libfuzzer_sys::fuzz_target;
 
-#[path = "lidar_common.rs"]
-mod lidar_common;
+use beamfield_fuzz::lidar_common;
 
 fuzz_target!(|data: &[u8]| {
     let (sizes, body) = data.split_at(data.len().min(4));

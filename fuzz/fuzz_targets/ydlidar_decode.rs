@@ -1,7 +1,7 @@
 //! Fuzzes the YDLIDAR decoder and the assemblers behind it: fuzz bytes become packets of fuzzed
 //! type, sample count (0..=40), angles (check bits set, 15-bit angles, so some are ≥ 360°) and
 //! samples with a correct check code (so mutations reach the contents, the angle correction and
-//! the assemblers), raw runs and cut packets; see `lidar_common.rs` for what is checked. The byte
+//! the assemblers), raw runs and cut packets; see `fuzz/src/lidar_common.rs` for what is checked. The byte
 //! accounting of packets of varying length uses the decoder's `frame_bytes()`.
 //!
 //! Run: `cargo +nightly fuzz run ydlidar_decode` from the repository root.
@@ -11,8 +11,7 @@
 use beamfield::lidar::ydlidar::{self, YdlidarDecoder};
 use libfuzzer_sys::fuzz_target;
 
-#[path = "lidar_common.rs"]
-mod lidar_common;
+use beamfield_fuzz::lidar_common;
 
 /// Type, count, FSA, LSA, then up to 40 samples.
 const FIELDS: usize = 6 + 2 * 40;

@@ -9,8 +9,7 @@ use beamfield::{BeamIntrinsics, BeamModel};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 
-#[path = "../common/em_data.rs"]
-mod em_data;
+use host_workloads::em_data;
 
 use em_data::{data, ITERATIONS};
 

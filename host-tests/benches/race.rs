@@ -3,7 +3,7 @@
 //! scoring whole scans of the Intel lab log at their logged poses, against the demo firmware's
 //! blob of the Intel map. Baselines measured in the same run over the same readings: a loop
 //! that only sums the ranges, one `f32::ln` per beam (as `benches/beam.rs`), and an AMCL-style
-//! beam model (`common/amcl_beam.rs`: Bresenham casts, f64 mixture, `p += pz³`) on the same
+//! beam model (`workloads/src/amcl_beam.rs`: Bresenham casts, f64 mixture, `p += pz³`) on the same
 //! walls, whole and its casts alone.
 //!
 //! Run: `cargo bench -p host-tests --bench race`. One iteration scores all 91 scans (every 10th
@@ -15,14 +15,11 @@
 //! model's cost into z* and mixture, and the batch cast `RayCaster::cast_dirs_lanes` over whole
 //! scans with 1 (one ray at a time), 2, 4 and 8 (the default, `CAST_LANES`) interleaved rays.
 
-#[path = "../common/intel_race.rs"]
-mod intel_race;
+use host_workloads::intel_race;
 
-#[path = "../common/amcl_beam.rs"]
-mod amcl_beam;
+use host_workloads::amcl_beam;
 
-#[path = "../common/race_passes.rs"]
-mod race_passes;
+use host_workloads::race_passes;
 
 use beamfield::{SensorModel, Stride};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};

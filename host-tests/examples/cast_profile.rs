@@ -9,13 +9,9 @@
 //! ray at a time, `RayCaster::cast_dir`) or `amcl` (the race's AMCL-style Bresenham baseline).
 //! Prints the checksum of the ranges, so two builds can be checked to cast the same.
 
-#[path = "../common/intel_race.rs"]
-mod intel_race;
+use host_workloads::intel_race;
 
-// Only the casts are profiled here, not the baseline's mixture.
-#[allow(dead_code)]
-#[path = "../common/amcl_beam.rs"]
-mod amcl_beam;
+use host_workloads::amcl_beam;
 
 use beamfield::Stride;
 use std::hint::black_box;

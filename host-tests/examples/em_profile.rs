@@ -6,8 +6,7 @@
 //! `exact`); `skip` as the update runs everything but the fits (the harness's own count).
 //! Prints the passes of one fit, so a count can be divided per pass and per reading.
 
-#[path = "../common/em_data.rs"]
-mod em_data;
+use host_workloads::em_data;
 
 use beamfield::em::{fit_slices, EmConfig, ShapeUpdate};
 use beamfield::BeamIntrinsics;

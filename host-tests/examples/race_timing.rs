@@ -7,14 +7,11 @@
 //!
 //! `cargo run --release -p host-tests --example race_timing [ROUNDS]` (default 50 rounds).
 
-#[path = "../common/intel_race.rs"]
-mod intel_race;
+use host_workloads::intel_race;
 
-#[path = "../common/amcl_beam.rs"]
-mod amcl_beam;
+use host_workloads::amcl_beam;
 
-#[path = "../common/race_passes.rs"]
-mod race_passes;
+use host_workloads::race_passes;
 
 use intel_race::N;
 use std::hint::black_box;

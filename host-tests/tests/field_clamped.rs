@@ -6,18 +6,14 @@
 //! Intel demo's scores and best poses, the ray caster's ranges (clamped codes are lower
 //! bounds), and the bytes per cell.
 
-#[path = "../../firmware/src/demo_plan.rs"]
-#[allow(dead_code)]
-mod demo_plan;
-
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams, ENCODING_TILED};
 use beamfield::{BeamLayout, CastTrace, Pose, RayCaster, Scan, SensorMount};
+use beamfield_fixtures::demo_plan::{fine_search, COARSE, SIGMA_HIT_M, Z_HIT, Z_RAND};
 use beamfield_tools::beam_fit::map_from_log;
 use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::demo_assets::SCAN_INDICES;
 use beamfield_tools::field_cmd::{build_blob, build_blob_clamped};
 use beamfield_tools::map::load_map;
-use demo_plan::{fine_search, COARSE, SIGMA_HIT_M, Z_HIT, Z_RAND};
 
 const N: usize = 180;
 /// The clamp distance measured in docs/blob-format.md, metres.

@@ -4,20 +4,16 @@
 //! single-bit flip, and every single-bit flip with the checksums recomputed, so that the
 //! structural checks are reached).
 
-#[path = "../../firmware/src/demo_plan.rs"]
-#[allow(dead_code)]
-mod demo_plan;
-
 use beamfield::field::{
     emit_blob, BlobError, FieldHeader, FieldView, LikelihoodField, LikelihoodParams, ENCODING_TILED,
 };
 use beamfield::fixed_point::{FixedField, FixedLayout, FixedPose, FixedScan};
 use beamfield::{BeamLayout, Pose, RayCaster, Scan, SensorMount};
+use beamfield_fixtures::demo_plan::{fine_search, COARSE, SIGMA_HIT_M, Z_HIT, Z_RAND};
 use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::demo_assets::SCAN_INDICES;
 use beamfield_tools::field_cmd::{build_blob, tile_blob, tile_blob_clamped};
 use beamfield_tools::map::load_map;
-use demo_plan::{fine_search, COARSE, SIGMA_HIT_M, Z_HIT, Z_RAND};
 use proptest::prelude::*;
 
 const N: usize = 180;

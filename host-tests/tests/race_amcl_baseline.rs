@@ -1,4 +1,4 @@
-//! The race's AMCL-style baseline (`common/amcl_beam.rs`) sees the same walls as the crate's
+//! The race's AMCL-style baseline (`workloads/src/amcl_beam.rs`) sees the same walls as the crate's
 //! ray caster: its Bresenham `z*` against `BeamFieldModel::cast_layout` on the race's 16,380
 //! Intel casts. A broken baseline (casting nothing, or another map) would make the race's
 //! same-run ratio meaningless; this is what keeps it honest.
@@ -11,11 +11,9 @@
 //!
 //! Run: `cargo test -p host-tests --release --test race_amcl_baseline -- --nocapture`.
 
-#[path = "../common/intel_race.rs"]
-mod intel_race;
+use host_workloads::intel_race;
 
-#[path = "../common/amcl_beam.rs"]
-mod amcl_beam;
+use host_workloads::amcl_beam;
 
 use beamfield::{Pose, SensorModel, Stride};
 use intel_race::N;

@@ -12,8 +12,7 @@
 //! Run: `cargo test -p host-tests --release --test race_smoothness -- --nocapture` (prints the
 //! table; docs/race.md quotes it).
 
-#[path = "../common/intel_race.rs"]
-mod intel_race;
+use host_workloads::intel_race;
 
 use beamfield::{BeamFieldModel, LikelihoodField, Pose, SensorModel, Stride};
 use intel_race::{RaceData, N};

@@ -5,8 +5,7 @@
 //! `BeamFieldModel::score` / `cast_layout`, which cast through the batch, against the same sums
 //! and ranges computed one ray at a time in bearing order.
 
-#[path = "../common/intel_race.rs"]
-mod intel_race;
+use host_workloads::intel_race;
 
 use beamfield::field::{emit_blob, FieldHeader, FieldView};
 use beamfield::{BeamFieldModel, Pose, RayCaster, SensorModel, Stride};

@@ -1,4 +1,4 @@
-//! Writes the track firmware's input (`firmware/assets/track.rs`) from the Intel lab log. Run by
+//! Writes the track firmware's input (`fixtures/assets/track.rs`) from the Intel lab log. Run by
 //! `cargo xtask track-assets`.
 //!
 //! Usage: `track_assets LOG OUT_FILE`.

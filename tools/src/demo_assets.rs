@@ -1,8 +1,8 @@
 //! The demo firmware's inputs, made from the real Intel lab log: the distance-field blob of a
 //! map built from the log, and a few real scans with their logged poses as Rust source.
 //!
-//! `cargo xtask demo-assets` writes them to `firmware/assets/`; a host test regenerates them and
-//! fails if the checked-in files differ, so they cannot go stale.
+//! `cargo xtask demo-assets` writes the blobs to [`BLOB_DIR`] and the scans to [`SOURCE_DIR`]; a
+//! host test regenerates them and fails if the checked-in files differ, so they cannot go stale.
 
 use crate::carmen::{CarmenLog, ReadOptions};
 use crate::field_cmd::build_blob;
@@ -13,6 +13,12 @@ use crate::mapping::{
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// Where the blobs go, relative to the repository: the firmware links them from there.
+pub const BLOB_DIR: &str = "firmware/assets";
+/// Where the scans (Rust source) go, relative to the repository: the fixtures crate, shared by
+/// the firmware and its host checks, includes them from there.
+pub const SOURCE_DIR: &str = "fixtures/assets";
+
 /// Cell size of the demo map, metres.
 pub const CELL_M: f64 = 0.05;
 /// Distance clamp of the demo blob, metres (AMCL's `laser_likelihood_max_dist`).
@@ -20,7 +26,7 @@ pub const MAX_DIST_M: f32 = 2.0;
 /// Which FLASER scans of the log the demo embeds (0-based), spread over the whole run.
 pub const SCAN_INDICES: [usize; 8] = [50, 163, 276, 389, 502, 615, 728, 841];
 /// The consecutive FLASER scans (0-based) that `cargo xtask lidar` sends to the firmware as an
-/// LD06 stream (`firmware/assets/lidar_segment.rs`): 24 scans of the robot driving.
+/// LD06 stream (`fixtures/assets/lidar_segment.rs`): 24 scans of the robot driving.
 pub const LIDAR_SEGMENT: core::ops::Range<usize> = 300..324;
 
 /// The generated files' contents.

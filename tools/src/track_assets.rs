@@ -1,10 +1,14 @@
-//! The on-device track's input (`firmware/assets/track.rs`), made from the real Intel lab log:
+//! The on-device track's input (`fixtures/assets/track.rs`, [`PATH`]), made from the real Intel lab log:
 //! its first [`SCANS`] scans with their logged poses and the odometry `beamfield track`
 //! synthesizes for seed [`SEED`] at `odom_alpha` [`ODOM_ALPHA`] ([`synthesize_odometry`], the
 //! same function and generator), as Rust source.
 //!
 //! `cargo xtask track-assets` writes it; a host test regenerates it and fails if the checked-in
 //! file differs, so the device's inputs stay those of `beamfield track --seed 1 --scans 90`.
+
+/// Where the asset goes, relative to the repository: the fixtures crate, shared by the firmware
+/// and its host check, includes it from there.
+pub const PATH: &str = "fixtures/assets/track.rs";
 
 use crate::carmen::{CarmenLog, ReadOptions};
 use crate::track::synthesize_odometry;

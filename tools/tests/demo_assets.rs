@@ -10,22 +10,25 @@ fn checked_in_demo_assets_are_current() {
     let work = std::env::temp_dir().join(format!("beamfield-demo-test-{}", std::process::id()));
     let fresh = generate(&log, &work).expect("generate");
     let _ = std::fs::remove_dir_all(&work);
-    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware/assets");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let assets = repo.join(beamfield_tools::demo_assets::BLOB_DIR);
+    let sources = repo.join(beamfield_tools::demo_assets::SOURCE_DIR);
     let blob = std::fs::read(assets.join("intel.bin")).expect("firmware/assets/intel.bin");
-    let scans = std::fs::read_to_string(assets.join("scans.rs")).expect("firmware/assets/scans.rs");
+    let scans =
+        std::fs::read_to_string(sources.join("scans.rs")).expect("fixtures/assets/scans.rs");
     assert!(
         blob == fresh.blob,
         "firmware/assets/intel.bin is stale: run `cargo xtask demo-assets`"
     );
     assert!(
         scans == fresh.scans_rs,
-        "firmware/assets/scans.rs is stale: run `cargo xtask demo-assets`"
+        "fixtures/assets/scans.rs is stale: run `cargo xtask demo-assets`"
     );
-    let segment = std::fs::read_to_string(assets.join("lidar_segment.rs"))
-        .expect("firmware/assets/lidar_segment.rs");
+    let segment = std::fs::read_to_string(sources.join("lidar_segment.rs"))
+        .expect("fixtures/assets/lidar_segment.rs");
     assert!(
         segment == fresh.lidar_segment_rs,
-        "firmware/assets/lidar_segment.rs is stale: run `cargo xtask demo-assets`"
+        "fixtures/assets/lidar_segment.rs is stale: run `cargo xtask demo-assets`"
     );
     let tiled =
         std::fs::read(assets.join("intel-tiled.bin")).expect("firmware/assets/intel-tiled.bin");

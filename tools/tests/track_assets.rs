@@ -9,10 +9,12 @@ use std::path::Path;
 fn checked_in_track_asset_is_current() {
     let log = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
     let fresh = generate(&log).expect("generate");
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware/assets/track.rs");
-    let checked_in = std::fs::read_to_string(&path).expect("firmware/assets/track.rs");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join(beamfield_tools::track_assets::PATH);
+    let checked_in = std::fs::read_to_string(&path).expect("fixtures/assets/track.rs");
     assert!(
         checked_in == fresh,
-        "firmware/assets/track.rs is stale: run `cargo xtask track-assets`"
+        "fixtures/assets/track.rs is stale: run `cargo xtask track-assets`"
     );
 }

@@ -1,16 +1,15 @@
-//! `cargo xtask budgets` (flash, RAM, stack and instruction budgets of the scoring core, as a
-//! table against the demo's targets) and `cargo xtask nopanic` (the link-time proof that the
-//! scoring core has no panic path, and `--show-failure`, which shows that proof failing on a
-//! deliberate panic).
+//! `cargo xtask budgets`: flash, RAM, stack and instruction budgets of the scoring core, as a
+//! table against the demo's targets.
 
-use super::{
-    build_firmware, capture, cargo, ensure_llvm_nm, ensure_qemu, ensure_target, repo_root, show,
-    Result, FIRMWARE_TARGET,
-};
-use std::collections::BTreeMap;
+use crate::budget_run::run_budget;
+use crate::cross::build_firmware;
+use crate::elf::{gsec, region_length, sections, symbols, LAYOUT};
+use crate::error::{Error, Result};
+use crate::process::{capture, repo_root};
+use crate::qemu::ensure_qemu;
+use crate::toolchain::{llvm_tool, FIRMWARE_TARGET};
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 
 /// Target: text of the scoring core, bytes.
 const TARGET_TEXT: u64 = 8 * 1024;
@@ -18,10 +17,6 @@ const TARGET_TEXT: u64 = 8 * 1024;
 const TARGET_RAM: u64 = 2 * 1024;
 /// Target: instructions per beam of the likelihood field.
 const TARGET_LF_PER_BEAM: f64 = 20.0;
-/// The real MCU layout the image must fit (a hard requirement).
-const LAYOUT: &str = "memory-stm32f405.x";
-/// The symbol `size_core`'s panic handler calls under the `nopanic` feature.
-const NOPANIC_SYMBOL: &str = "beamfield_scoring_path_can_panic";
 /// Symbols that only a program with a heap contains.
 const ALLOC_SYMBOLS: [&str; 4] = [
     "__rust_alloc",
@@ -29,178 +24,6 @@ const ALLOC_SYMBOLS: [&str; 4] = [
     "__rdl_alloc",
     "__rust_alloc_error_handler",
 ];
-
-/// An LLVM tool from PATH or from the Rust sysroot (`rustup component add llvm-tools`).
-pub(crate) fn llvm_tool(name: &str) -> Result<PathBuf> {
-    let works = |p: &Path| {
-        Command::new(p)
-            .arg("--version")
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success())
-    };
-    if works(Path::new(name)) {
-        return Ok(PathBuf::from(name));
-    }
-    ensure_llvm_nm()?;
-    let sysroot = capture(Command::new("rustc").args(["--print", "sysroot"]))?;
-    let host = capture(Command::new("rustc").args(["--print", "host-tuple"]))?;
-    let p = Path::new(sysroot.trim()).join(format!("lib/rustlib/{}/bin/{name}", host.trim()));
-    if works(&p) {
-        Ok(p)
-    } else {
-        Err(format!(
-            "{name} not found (rustup component add llvm-tools)"
-        ))
-    }
-}
-
-/// Allocated sections of an ELF and their sizes, bytes (`llvm-size -A`).
-pub(crate) fn sections(size: &Path, elf: &Path) -> Result<BTreeMap<String, u64>> {
-    let out = capture(Command::new(size).arg("-A").arg(elf))?;
-    let mut map = BTreeMap::new();
-    for line in out.lines() {
-        let mut f = line.split_whitespace();
-        if let (Some(name), Some(bytes), Some(addr), None) =
-            (f.next(), f.next(), f.next(), f.next())
-        {
-            // Debug sections sit at address 0 and are not loaded; keep the loaded ones.
-            let loaded = addr != "0" || name == ".vector_table";
-            if let (true, true, Ok(n)) = (name.starts_with('.'), loaded, bytes.parse::<u64>()) {
-                map.insert(name.to_string(), n);
-            }
-        }
-    }
-    Ok(map)
-}
-
-/// `LENGTH = …` of a region of a memory.x, bytes.
-fn region_length(layout: &str, region: &str) -> Result<u64> {
-    let line = layout
-        .lines()
-        .map(str::trim)
-        .find(|l| l.starts_with(region) && l.contains("LENGTH"))
-        .ok_or_else(|| format!("{LAYOUT}: no {region} region"))?;
-    let v = line
-        .split("LENGTH")
-        .nth(1)
-        .and_then(|s| s.split('=').nth(1))
-        .map(|s| s.trim().trim_end_matches([',', ';']).trim())
-        .ok_or_else(|| format!("{LAYOUT}: cannot read `{line}`"))?;
-    let (digits, mult) = match v.strip_suffix('K') {
-        Some(d) => (d, 1024),
-        None => match v.strip_suffix('M') {
-            Some(d) => (d, 1024 * 1024),
-            None => (v, 1),
-        },
-    };
-    let n: u64 = if let Some(hex) = digits.strip_prefix("0x") {
-        u64::from_str_radix(hex, 16).map_err(|e| format!("{LAYOUT}: `{v}`: {e}"))?
-    } else {
-        digits
-            .parse()
-            .map_err(|e| format!("{LAYOUT}: `{v}`: {e}"))?
-    };
-    Ok(n * mult)
-}
-
-/// One measured region of `budget.rs`: name, poses, beams per pose, instructions.
-struct Region {
-    name: String,
-    poses: u64,
-    beams: u64,
-    insns: u64,
-}
-
-/// What one run of `budget.rs` under the counting plugin reported.
-struct Run {
-    /// The program's description of its scan.
-    scan: String,
-    regions: Vec<Region>,
-    stack: BTreeMap<String, u64>,
-    state: BTreeMap<String, u64>,
-}
-
-fn parse_run(out: &str, err: &str) -> Result<Run> {
-    let mut counts = BTreeMap::new();
-    for l in out.lines().chain(err.lines()) {
-        let Some(rest) = l.strip_prefix("insncount: region ") else {
-            continue;
-        };
-        let parsed = rest.split_once(": ").and_then(|(i, n)| {
-            Some((
-                i.parse::<usize>().ok()?,
-                n.strip_suffix(" instructions")?.parse::<u64>().ok()?,
-            ))
-        });
-        let (i, n) = parsed.ok_or_else(|| format!("cannot read `{l}`"))?;
-        counts.insert(i, n);
-    }
-    let mut regions = Vec::new();
-    let mut scan = String::new();
-    let (mut stack, mut state) = (BTreeMap::new(), BTreeMap::new());
-    for l in out.lines() {
-        let Some(rest) = l.strip_prefix("budget: ") else {
-            continue;
-        };
-        let f: Vec<&str> = rest.split_whitespace().collect();
-        match f.as_slice() {
-            ["region", i, name, "poses", p, "beams", b] => {
-                let i: usize = i.parse().map_err(|_| format!("cannot read `{l}`"))?;
-                let insns = *counts.get(&i).ok_or_else(|| {
-                    format!("the plugin reported no count for region {i} ({name})")
-                })?;
-                regions.push(Region {
-                    name: name.to_string(),
-                    poses: p.parse().map_err(|_| format!("cannot read `{l}`"))?,
-                    beams: b.parse().map_err(|_| format!("cannot read `{l}`"))?,
-                    insns,
-                });
-            }
-            ["stack", name, n] => {
-                stack.insert(
-                    name.to_string(),
-                    n.parse().map_err(|_| format!("cannot read `{l}`"))?,
-                );
-            }
-            ["scan", ..] => scan = rest.to_string(),
-            ["state", name, n] => {
-                state.insert(
-                    name.to_string(),
-                    n.parse().map_err(|_| format!("cannot read `{l}`"))?,
-                );
-            }
-            _ => {}
-        }
-    }
-    if regions.len() != counts.len() {
-        return Err(format!(
-            "budget.rs named {} regions, the plugin counted {}",
-            regions.len(),
-            counts.len()
-        ));
-    }
-    Ok(Run {
-        scan,
-        regions,
-        stack,
-        state,
-    })
-}
-
-/// Runs `budget` under the counting plugin (as `cargo xtask insns` does).
-fn run_budget(elf: &Path, machine: &str) -> Result<Run> {
-    let (code, out, err) = crate::insncount::run_counted(elf, machine, "budget")?;
-    if code != 0 {
-        eprint!("{out}{err}");
-        return Err(format!("the budget program exited {code} under QEMU"));
-    }
-    for l in out.lines().filter(|l| !l.starts_with("budget: ")) {
-        eprintln!("{l}");
-    }
-    parse_run(&out, &err)
-}
 
 /// One row of the table.
 struct Row {
@@ -237,58 +60,16 @@ fn hard(what: impl Into<String>, value: impl Into<String>, target: String, ok: b
     }
 }
 
-fn gsec(m: &BTreeMap<String, u64>, names: &[&str]) -> u64 {
-    names.iter().filter_map(|n| m.get(*n)).sum()
-}
-
-/// Code and data symbols of an ELF (`llvm-nm -S -C`), name (without the hash) → bytes.
-fn symbols(nm: &Path, elf: &Path) -> Result<BTreeMap<String, u64>> {
-    let out = capture(Command::new(nm).args(["-S", "-C", "--size-sort"]).arg(elf))?;
-    let mut map = BTreeMap::new();
-    for line in out.lines() {
-        let mut f = line.splitn(4, ' ');
-        let (Some(_), Some(size), Some(kind), Some(name)) =
-            (f.next(), f.next(), f.next(), f.next())
-        else {
-            continue;
-        };
-        // t/T: code, r/R: constants, d/D/b/B: static RAM.
-        if !matches!(kind, "t" | "T" | "r" | "R" | "d" | "D" | "b" | "B") {
-            continue;
-        }
-        let Ok(bytes) = u64::from_str_radix(size, 16) else {
-            continue;
-        };
-        let name = match name.rsplit_once("::h") {
-            Some((base, hash)) if hash.len() == 16 => base,
-            _ => name,
-        };
-        // The two programs' own items differ only by their crate name; legacy-mangled trait
-        // impls keep `$LT$`-style escapes after demangling.
-        let name = name
-            .replace("size_core::", "<program>::")
-            .replace("size_lf::", "<program>::")
-            .replace("size_skeleton::", "<program>::")
-            .replace("$LT$", "<")
-            .replace("$GT$", ">")
-            .replace("$u20$", " ")
-            .replace("..", "::");
-        let name = name.trim_start_matches('_');
-        *map.entry(name.to_string()).or_insert(0) += bytes;
-    }
-    Ok(map)
-}
-
+/// `cargo xtask budgets`: the table on QEMU's `machine`, the firmware built with `features`.
 pub fn budgets(machine: &str, features: Option<&str>) -> Result {
     ensure_qemu()?;
-    ensure_llvm_nm()?;
     let size = llvm_tool("llvm-size")?;
     let nm = llvm_tool("llvm-nm")?;
     let elves = build_firmware(true, features)?;
     let elf = |n: &str| {
         elves
             .get(n)
-            .ok_or_else(|| format!("the firmware has no `{n}` program"))
+            .ok_or_else(|| Error::Output(format!("the firmware has no `{n}` program")))
     };
     let (core_elf, lf_elf, skel_elf, budget_elf) = (
         elf("size_core")?,
@@ -319,7 +100,7 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
     let run = run_budget(budget_elf, machine)?;
     let stack = |n: &str| run.stack.get(n).copied();
     let state = |n: &str| run.state.get(n).copied();
-    let region = |n: &str| run.regions.iter().find(|r| r.name == n);
+    let region = |n: &str| run.region(n);
 
     let mut rows = Vec::new();
     let lf_text = lf_diff(&[".text"]);
@@ -413,8 +194,8 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
         "none".into(),
         with_heap.is_empty(),
     ));
-    let layout_text =
-        fs::read_to_string(repo_root().join(LAYOUT)).map_err(|e| format!("{LAYOUT}: {e}"))?;
+    let layout_path = repo_root().join(LAYOUT);
+    let layout_text = fs::read_to_string(&layout_path).map_err(|e| Error::io(&layout_path, e))?;
     let (flash_max, ram_max) = (
         region_length(&layout_text, "FLASH")?,
         region_length(&layout_text, "RAM")?,
@@ -551,85 +332,15 @@ pub fn budgets(machine: &str, features: Option<&str>) -> Result {
         failed.len()
     );
     if !failed.is_empty() {
-        return Err(format!("hard budget failed: {}", failed.join("; ")));
+        return Err(Error::Requirement(format!(
+            "hard budget failed: {}",
+            failed.join("; ")
+        )));
     }
     if !counted || run.stack.len() < 4 {
-        return Err("the budget program did not report every measurement".into());
+        return Err(Error::Output(
+            "the budget program did not report every measurement".into(),
+        ));
     }
     Ok(())
-}
-
-/// Builds `size_core` with `nopanic` (its panic handler calls an undefined function). Without
-/// `show_failure` the link must succeed; with it, `deliberate-panic` is added and the link must
-/// fail on exactly that undefined symbol.
-pub fn nopanic(show_failure: bool) -> Result {
-    ensure_target(FIRMWARE_TARGET)?;
-    let features = if show_failure {
-        "nopanic,deliberate-panic"
-    } else {
-        "nopanic"
-    };
-    let mut cmd = cargo();
-    cmd.current_dir(repo_root().join("firmware")).args([
-        "build",
-        "--release",
-        "--target",
-        FIRMWARE_TARGET,
-        "--bin",
-        "size_core",
-        "--features",
-        features,
-    ]);
-    eprintln!("+ (cd firmware && {})", show(&cmd));
-    let out = cmd
-        .stdin(Stdio::null())
-        .output()
-        .map_err(|e| format!("cannot start `{}`: {e}", show(&cmd)))?;
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let undefined = stderr
-        .lines()
-        .any(|l| l.contains("undefined symbol") && l.contains(NOPANIC_SYMBOL));
-    match (show_failure, out.status.success()) {
-        (false, true) => {
-            eprint!("{stderr}");
-            println!(
-                "nopanic: PASS: size_core (the scoring core: blob parsing, tempered likelihood \
-                 field, weight normalization, beam model with ray casting) links with a panic \
-                 handler that calls the undefined `{NOPANIC_SYMBOL}`: no panic path is left \
-                 (release, LTO, 1 codegen unit, overflow checks off)"
-            );
-            Ok(())
-        }
-        (false, false) => {
-            eprint!("{stderr}");
-            Err(if undefined {
-                format!(
-                    "a panic path is left in the scoring core: the link needs `{NOPANIC_SYMBOL}`"
-                )
-            } else {
-                "the no-panic build failed for another reason (see above)".to_string()
-            })
-        }
-        (true, true) => Err(
-            "size_core with `deliberate-panic` linked: the no-panic proof cannot fail, so it proves nothing"
-                .to_string(),
-        ),
-        (true, false) => {
-            for l in stderr.lines().filter(|l| l.contains("undefined symbol")) {
-                eprintln!("{l}");
-            }
-            if undefined {
-                println!(
-                    "nopanic --show-failure: PASS: with a deliberate out-of-bounds index the \
-                     link fails on the undefined `{NOPANIC_SYMBOL}`, as it must"
-                );
-                Ok(())
-            } else {
-                eprint!("{stderr}");
-                Err(format!(
-                    "the deliberate-panic build failed, but not on the undefined `{NOPANIC_SYMBOL}`"
-                ))
-            }
-        }
-    }
 }

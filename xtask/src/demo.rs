@@ -1,111 +1,17 @@
 //! `cargo xtask demo` and `cargo xtask demo-assets`: the pose-scoring demo under QEMU on one of
 //! two boards, and the regeneration of its checked-in assets.
 
-use super::{capture, ensure_qemu, ensure_target, repo_root, run, run_to_files, show, Result};
-use super::{cargo, FIRMWARE_TARGET, QEMU_TIMEOUT_S};
-use std::path::PathBuf;
-use std::process::Command;
+use crate::cross::build_program;
+use crate::error::{Error, Result};
+use crate::process::{cargo, repo_root, run, Finished};
+use crate::qemu::{ensure_qemu, failure, run_elf, Board};
 
-/// A board the demo runs on: QEMU machine, memory layout, SysTick clock.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum Board {
-    /// ARM MPS2+ AN386: Cortex-M4F, 4 MiB code, 4 MiB SRAM, 25 MHz (the repository's memory.x).
-    #[value(name = "mps2-an386")]
-    Mps2An386,
-    /// STM32F405 (Netduino Plus 2): 1 MiB flash, 128 KiB of its SRAM used (memory-stm32f405.x).
-    #[value(name = "netduinoplus2")]
-    Netduinoplus2,
-}
-
-impl Board {
-    pub fn machine(self) -> &'static str {
-        match self {
-            Board::Mps2An386 => "mps2-an386",
-            Board::Netduinoplus2 => "netduinoplus2",
-        }
-    }
-    pub(crate) fn memory_x(self) -> PathBuf {
-        repo_root().join(match self {
-            Board::Mps2An386 => "memory.x",
-            Board::Netduinoplus2 => "memory-stm32f405.x",
-        })
-    }
-    /// SysTick's clock in QEMU's model of the board, Hz.
-    fn core_hz(self) -> u64 {
-        match self {
-            Board::Mps2An386 => 25_000_000,
-            Board::Netduinoplus2 => 168_000_000,
-        }
-    }
-}
-
-/// Builds firmware program `bin` (release) for `board` and runs it under QEMU; returns its exit
-/// code, stdout and stderr. The SysTick clock of the board reaches the build as
-/// `BEAMFIELD_CORE_HZ`.
-pub fn build_and_run(board: Board, bin: &str) -> Result<(i32, String, String)> {
-    build_and_run_with(board, bin, &[])
-}
-
-/// [`build_and_run`] with firmware cargo `features` turned on.
-pub fn build_and_run_with(
-    board: Board,
-    bin: &str,
-    features: &[&str],
-) -> Result<(i32, String, String)> {
+/// Builds firmware program `bin` (release) for `board` with firmware cargo `features` and runs
+/// it under QEMU.
+pub fn build_and_run(board: Board, bin: &str, features: &[&str]) -> Result<Finished> {
     ensure_qemu()?;
-    let elf = build_with(board, bin, features)?;
-    run_to_files(
-        Command::new("timeout")
-            .args([
-                QEMU_TIMEOUT_S,
-                "qemu-system-arm",
-                "-machine",
-                board.machine(),
-            ])
-            .args([
-                "-nographic",
-                "-semihosting-config",
-                "enable=on,target=native",
-            ])
-            .args(["-icount", "shift=0", "-kernel"])
-            .arg(&elf),
-        bin,
-    )
-}
-
-/// Builds firmware program `bin` (release) for `board`; returns the ELF's path.
-pub fn build(board: Board, bin: &str) -> Result<PathBuf> {
-    build_with(board, bin, &[])
-}
-
-/// [`build`] with firmware cargo `features` turned on.
-pub fn build_with(board: Board, bin: &str, features: &[&str]) -> Result<PathBuf> {
-    ensure_target(FIRMWARE_TARGET)?;
-    let mut cmd = cargo();
-    cmd.current_dir(repo_root().join("firmware"))
-        .env("BEAMFIELD_MEMORY_X", board.memory_x())
-        .env("BEAMFIELD_CORE_HZ", board.core_hz().to_string())
-        .args([
-            "build",
-            "--release",
-            "--target",
-            FIRMWARE_TARGET,
-            "--bin",
-            bin,
-            "--message-format=json-render-diagnostics",
-        ]);
-    if !features.is_empty() {
-        cmd.args(["--features", &features.join(",")]);
-    }
-    eprintln!("+ (cd firmware && {})", show(&cmd));
-    let out = capture(&mut cmd)?;
-    let elf = out
-        .lines()
-        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .filter(|m| m["reason"] == "compiler-artifact" && m["target"]["name"] == bin)
-        .find_map(|m| m["executable"].as_str().map(PathBuf::from))
-        .ok_or_else(|| format!("cargo built no `{bin}` executable"))?;
-    Ok(elf)
+    let elf = build_program(board, bin, features)?;
+    run_elf(&elf, board.machine(), &[], bin)
 }
 
 /// How the demo links the Intel field.
@@ -129,14 +35,18 @@ pub fn demo(board: Board, encoding: DemoEncoding) -> Result {
         DemoEncoding::Raw => &[],
         DemoEncoding::Tiled => &["tiled"],
     };
-    let (code, out, err) = build_and_run_with(board, "demo", features)?;
+    let Finished {
+        code,
+        stdout: out,
+        stderr: err,
+    } = build_and_run(board, "demo", features)?;
     print!("{out}");
     eprint!("{err}");
     match code {
         0 => {
             let read = |name: &str| {
                 let path = repo_root().join("firmware/assets").join(name);
-                std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))
+                std::fs::read(&path).map_err(|e| Error::io(&path, e))
             };
             let raw = read("intel.bin")?;
             if encoding == DemoEncoding::Tiled {
@@ -161,7 +71,7 @@ pub fn demo(board: Board, encoding: DemoEncoding) -> Result {
             );
             Ok(())
         }
-        c => Err(qemu_failure(
+        c => Err(failure(
             c,
             "the demo",
             machine,
@@ -170,18 +80,8 @@ pub fn demo(board: Board, encoding: DemoEncoding) -> Result {
     }
 }
 
-/// The error for a firmware program (`what`, e.g. "the demo") that exited `code` (not 0) under
-/// QEMU on `machine`: 124 is `timeout` killing it after [`QEMU_TIMEOUT_S`] seconds, 134 a CPU
-/// lockup (QEMU aborts), any other code the program's own failure, explained by `cause`.
-pub fn qemu_failure(code: i32, what: &str, machine: &str, cause: &str) -> String {
-    match code {
-        124 => format!("{what} did not finish within {QEMU_TIMEOUT_S} s"),
-        134 => format!("QEMU stopped with a CPU lockup on `{machine}`"),
-        c => format!("{what} exited {c} under QEMU ({machine}): {cause}"),
-    }
-}
-
-/// Regenerates `firmware/assets/` from the Intel lab log beside the repository.
+/// Regenerates the demo's assets from the Intel lab log in `data/`: the blobs in
+/// `firmware/assets/`, the scans in `fixtures/assets/`.
 pub fn demo_assets() -> Result {
     let root = repo_root();
     run(cargo().current_dir(&root).args([
@@ -194,5 +94,6 @@ pub fn demo_assets() -> Result {
         "--",
         "data/laser_intel_lab/intel-corrected.log",
         "firmware/assets",
+        "fixtures/assets",
     ]))
 }

@@ -18,9 +18,10 @@
 //! effective sample size must lie inside the bounds the brackets give (plus the printed digits'
 //! half unit).
 
-use crate::demo_ref::demo_plan::{COARSE, KAPPA, POSES, SIGMA_HIT_M, Z_HIT, Z_RAND};
-use crate::demo_ref::{MAX_RANGE_M, SCANS};
+use crate::error::{Error, Result};
 use beamfield::{FieldView, Pose};
+use beamfield_fixtures::demo_plan::{COARSE, KAPPA, POSES, SIGMA_HIT_M, Z_HIT, Z_RAND};
+use beamfield_fixtures::demo_scans::{MAX_RANGE_M, SCANS};
 
 /// Beams per scan and the layout's first bearing and step, as the demo builds them (f32).
 const BEAMS: usize = 180;
@@ -145,20 +146,21 @@ fn between<'a>(line: &'a str, start: &str, end: &str) -> Option<&'a str> {
     rest.get(..rest.find(end)?)
 }
 
-fn printed(out: &str, log_index: u32) -> Result<Printed, String> {
+fn printed(out: &str, log_index: u32) -> Result<Printed> {
     let head = format!("scan {log_index}: best (");
     let line = out
         .lines()
         .find(|l| l.starts_with(&head))
-        .ok_or_else(|| format!("the device printed no line for scan {log_index}"))?;
-    let bad = |what: &str| format!("scan {log_index}: cannot read {what} in {line:?}");
+        .ok_or_else(|| Error::Output(format!("the device printed no line for scan {log_index}")))?;
+    let bad =
+        |what: &str| Error::Output(format!("scan {log_index}: cannot read {what} in {line:?}"));
     let pose: Vec<f64> = between(line, "best (", " deg)")
         .ok_or_else(|| bad("the best pose"))?
         .split(", ")
         .filter_map(|p| p.trim().parse().ok())
         .collect();
     let best: [f64; 3] = pose.try_into().map_err(|_| bad("the best pose"))?;
-    let num = |key: &str| -> Result<f64, String> {
+    let num = |key: &str| -> Result<f64> {
         between(line, key, " ")
             .and_then(|t| t.parse().ok())
             .ok_or_else(|| bad(key.trim()))
@@ -187,8 +189,8 @@ pub struct ScanCheck {
 /// # Errors
 /// A scan whose printed best pose cannot be a maximum of the f64 brackets, or whose printed
 /// weight or ESS lies outside the bounds, or a report that cannot be read.
-pub fn check(out: &str, blob: &[u8]) -> Result<Vec<ScanCheck>, String> {
-    let view = FieldView::parse(blob).map_err(|e| format!("demo blob: {e}"))?;
+pub fn check(out: &str, blob: &[u8]) -> Result<Vec<ScanCheck>> {
+    let view = FieldView::parse(blob).map_err(|e| Error::Host(format!("demo blob: {e}")))?;
     let h = *view.header();
     let step_m = f64::from(h.max_dist_m) / 255.0;
     let map = Map {
@@ -218,18 +220,22 @@ pub fn check(out: &str, blob: &[u8]) -> Result<Vec<ScanCheck>, String> {
                     && (f64::from(q.y_m) - p.best[1]).abs() <= 0.0006
                     && (f64::from(q.theta_rad.to_degrees()) - p.best[2]).abs() <= 0.06
             })
-            .ok_or_else(|| format!("scan {s}: the printed best pose is not a grid pose"))?;
+            .ok_or_else(|| {
+                Error::Mismatch(format!(
+                    "scan {s}: the printed best pose is not a grid pose"
+                ))
+            })?;
         let top_lo = brackets
             .iter()
             .map(|b| b.c - b.e)
             .fold(f64::NEG_INFINITY, f64::max);
         let b = brackets[best];
         if b.c + b.e < top_lo {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "scan {s}: the device's best pose scores {:.4} ± {:.4} in f64, below another \
                  pose's lower bound {top_lo:.4}",
                 b.c, b.e
-            ));
+            )));
         }
         // Weights relative to the f64 maximum, and their brackets.
         let m = brackets
@@ -261,16 +267,16 @@ pub fn check(out: &str, blob: &[u8]) -> Result<Vec<ScanCheck>, String> {
             s_hi * s_hi / q_lo + 0.05,
         );
         if !(weight.1..=weight.2).contains(&p.weight) {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "scan {s}: the device's weight {} is outside the f64 bounds [{:.4}, {:.4}] (f64 {:.4})",
                 p.weight, weight.1, weight.2, weight.0
-            ));
+            )));
         }
         if !(ess.1..=ess.2).contains(&p.ess) {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "scan {s}: the device's ESS {} is outside the f64 bounds [{:.2}, {:.2}] (f64 {:.2})",
                 p.ess, ess.1, ess.2, ess.0
-            ));
+            )));
         }
         checks.push(ScanCheck {
             log_index: s,

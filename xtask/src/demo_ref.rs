@@ -1,16 +1,15 @@
 //! The host's run of the demo: every embedded scan recomputed on the host with the same crate,
-//! the same assets and the same plan (`firmware/src/demo_plan.rs`, shared word for word with
+//! the same assets and the same plan (`fixtures/src/demo_plan.rs`, shared word for word with
 //! the firmware), and the device's report checked against it to the printed digits.
 
-#[path = "../../firmware/src/demo_plan.rs"]
-#[allow(dead_code)]
-pub(crate) mod demo_plan;
-
+use crate::error::{Error, Result};
 use beamfield::{
     normalize_log_weights, BeamLayout, FieldView, Lag1, LikelihoodField, LikelihoodParams, Pose,
     Scan, SensorMount, Tempered,
 };
-use demo_plan::{fine_search, offset, COARSE, FINE, KAPPA, POSES, SIGMA_HIT_M, Z_HIT, Z_RAND};
+use beamfield_fixtures::demo_plan::{
+    fine_search, offset, COARSE, FINE, KAPPA, POSES, SIGMA_HIT_M, Z_HIT, Z_RAND,
+};
 
 /// Beams per FLASER scan of the Intel log.
 const BEAMS: usize = 180;
@@ -22,17 +21,7 @@ const BEAMS: usize = 180;
 /// changes both alike, and only this count catches it.
 const MIN_WITHIN: usize = 7;
 
-/// One real scan of the log with its logged laser pose (the firmware's type, same fields).
-pub struct DemoScan {
-    /// Index of the FLASER line in the log.
-    pub log_index: u32,
-    /// Logged laser pose `[x_m, y_m, theta_rad]`.
-    pub pose: [f32; 3],
-    /// The ranges, metres.
-    pub ranges_m: [f32; BEAMS],
-}
-
-include!("../../firmware/assets/scans.rs");
+use beamfield_fixtures::demo_scans::{MAX_RANGE_M, SCANS};
 
 /// What the device prints for one scan, computed on the host.
 struct ScanRef {
@@ -45,13 +34,13 @@ struct ScanRef {
     within: bool,
 }
 
-fn reference(blob: &[u8]) -> Result<Vec<ScanRef>, String> {
-    let view = FieldView::parse(blob).map_err(|e| format!("demo blob: {e}"))?;
+fn reference(blob: &[u8]) -> Result<Vec<ScanRef>> {
+    let view = FieldView::parse(blob).map_err(|e| Error::Host(format!("demo blob: {e}")))?;
     let params = LikelihoodParams::new(Z_HIT, Z_RAND, SIGMA_HIT_M, MAX_RANGE_M)
-        .map_err(|e| format!("demo parameters: {e}"))?;
+        .map_err(|e| Error::Host(format!("demo parameters: {e}")))?;
     let field = LikelihoodField::new(view, params);
-    let tempered =
-        Tempered::new(field.clone(), KAPPA, 1).map_err(|e| format!("demo tempering: {e}"))?;
+    let tempered = Tempered::new(field.clone(), KAPPA, 1)
+        .map_err(|e| Error::Host(format!("demo tempering: {e}")))?;
     let layout = BeamLayout::<BEAMS>::uniform(
         -core::f32::consts::FRAC_PI_2,
         core::f32::consts::PI / BEAMS as f32,
@@ -59,19 +48,19 @@ fn reference(blob: &[u8]) -> Result<Vec<ScanRef>, String> {
         MAX_RANGE_M,
         SensorMount::CENTERED,
     )
-    .map_err(|e| format!("demo layout: {e}"))?;
+    .map_err(|e| Error::Host(format!("demo layout: {e}")))?;
     let mut weights = vec![0.0f32; POSES];
     let mut out = Vec::new();
     for demo in SCANS.iter() {
         let logged = Pose::new(demo.pose[0], demo.pose[1], demo.pose[2]);
         let scan = Scan::<BEAMS>::from_ranges(&demo.ranges_m)
-            .map_err(|e| format!("scan {}: {e}", demo.log_index))?;
+            .map_err(|e| Error::Host(format!("scan {}: {e}", demo.log_index)))?;
         let prepared = tempered.prepare(&layout, &scan);
         for (i, w) in weights.iter_mut().enumerate() {
             *w = prepared.score(&COARSE.pose(&logged, i)).log_likelihood;
         }
         let norm = normalize_log_weights(&mut weights)
-            .map_err(|e| format!("scan {}: {e}", demo.log_index))?;
+            .map_err(|e| Error::Host(format!("scan {}: {e}", demo.log_index)))?;
         let best = COARSE.pose(&logged, norm.best);
         let mut lag1 = Lag1::new();
         field.score_with(&layout, &scan, &best, |_, d| lag1.push(d));
@@ -113,20 +102,20 @@ fn number_after(line: &str, key: &str) -> Option<f64> {
 
 /// Checks `printed` against `host` printed with `decimals` digits (the firmware rounds to the
 /// nearest: the two agree when they differ by at most half a unit of the last digit).
-fn close(what: &str, printed: f64, host: f32, decimals: i32) -> Result<(), String> {
+fn close(what: &str, printed: f64, host: f32, decimals: i32) -> Result<()> {
     let host = f64::from(host);
     let tol = 0.5 * 10f64.powi(-decimals) + 1e-9;
     if (printed.is_nan() && host.is_nan()) || (printed - host).abs() <= tol {
         Ok(())
     } else {
-        Err(format!(
+        Err(Error::Mismatch(format!(
             "{what}: device printed {printed}, host computes {host:.6}"
-        ))
+        )))
     }
 }
 
 /// [`close`] for a printed pose `(x, y, θ°)`: metres to 3 decimals, degrees to `deg_decimals`.
-fn close_pose(what: &str, printed: [f64; 3], host: &Pose, deg_decimals: i32) -> Result<(), String> {
+fn close_pose(what: &str, printed: [f64; 3], host: &Pose, deg_decimals: i32) -> Result<()> {
     close(&format!("{what} x"), printed[0], host.x_m, 3)?;
     close(&format!("{what} y"), printed[1], host.y_m, 3)?;
     close(
@@ -145,7 +134,7 @@ fn close_pose(what: &str, printed: [f64; 3], host: &Pose, deg_decimals: i32) -> 
 /// # Errors
 /// The first disagreement, a scan missing from the report, or fewer than [`MIN_WITHIN`] scans
 /// within 5 cm and 1°.
-pub fn check(out: &str, blob: &[u8]) -> Result<String, String> {
+pub fn check(out: &str, blob: &[u8]) -> Result<String> {
     let refs = reference(blob)?;
     let lines: Vec<&str> = out.lines().collect();
     for r in &refs {
@@ -153,13 +142,23 @@ pub fn check(out: &str, blob: &[u8]) -> Result<String, String> {
         let at = lines
             .iter()
             .position(|l| l.starts_with(&head))
-            .ok_or_else(|| format!("the device printed no line for scan {}", r.log_index))?;
+            .ok_or_else(|| {
+                Error::Output(format!(
+                    "the device printed no line for scan {}",
+                    r.log_index
+                ))
+            })?;
         let line = lines[at];
         let fine_line = lines
             .get(at + 1)
             .filter(|l| l.starts_with("  fine best ("))
-            .ok_or_else(|| format!("scan {}: no fine-search line", r.log_index))?;
-        let bad = |what: &str| format!("scan {}: cannot read {what} in {line:?}", r.log_index);
+            .ok_or_else(|| Error::Output(format!("scan {}: no fine-search line", r.log_index)))?;
+        let bad = |what: &str| {
+            Error::Output(format!(
+                "scan {}: cannot read {what} in {line:?}",
+                r.log_index
+            ))
+        };
         let s = r.log_index;
         let b = pose_after(line, "best (").ok_or_else(|| bad("the best pose"))?;
         close_pose(&format!("scan {s} best"), b, &r.best, 1)?;
@@ -173,17 +172,19 @@ pub fn check(out: &str, blob: &[u8]) -> Result<String, String> {
         close_pose(&format!("scan {s} fine"), f, &r.fine, 2)?;
         let verdict = if r.within { "within" } else { "OUTSIDE" };
         if !fine_line.trim_end().ends_with(verdict) {
-            return Err(format!("scan {s}: the host says {verdict}: {fine_line:?}"));
+            return Err(Error::Mismatch(format!(
+                "scan {s}: the host says {verdict}: {fine_line:?}"
+            )));
         }
     }
     let within = refs.iter().filter(|r| r.within).count();
     if within < MIN_WITHIN {
-        return Err(format!(
+        return Err(Error::Requirement(format!(
             "only {within} of {} scans' fine-best poses are within 5 cm and 1° of the logged pose \
              (the demo's result is {MIN_WITHIN}): the device and the host agree, so the crate \
              itself localizes worse",
             refs.len()
-        ));
+        )));
     }
     Ok(format!(
         "host reference: {} scans recomputed on the host agree with the device's report (best and fine-best poses, weights, ESS, lag-1, to the printed digits; {within} within)",

@@ -1,13 +1,11 @@
 //! The host side of `cargo xtask lidar`: the LD06 stream sent into the emulated USART (a real
-//! segment of consecutive Intel-lab scans, `firmware/assets/lidar_segment.rs`, written by the library's LD06 encoder, with start-up noise and a few
+//! segment of consecutive Intel-lab scans, `fixtures/assets/lidar_segment.rs`, written by the library's LD06 encoder, with start-up noise and a few
 //! corrupted frames), what the plan alone says the device must find in it, and the host's
 //! recomputation of the device's report with the same crate and the same plan
-//! (`firmware/src/lidar_plan.rs`, shared word for word with the firmware).
+//! (`fixtures/src/lidar_plan.rs`, shared word for word with the firmware).
 
-// The demo's plan, loaded once by `demo_ref` (lidar_plan reaches it as `super::demo_plan`).
-use crate::demo_ref::demo_plan;
-#[path = "../../firmware/src/lidar_plan.rs"]
-mod lidar_plan;
+use crate::error::{Error, Result};
+use beamfield_fixtures::{demo_plan, lidar_plan};
 
 use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
 use beamfield::Pose;
@@ -67,11 +65,11 @@ fn beam_at(cw_deg: usize) -> Option<usize> {
     (i < BEAMS).then_some(i)
 }
 
-/// Writes the 24 consecutive real scans of `firmware/assets/lidar_segment.rs` (Intel log
+/// Writes the 24 consecutive real scans of `fixtures/assets/lidar_segment.rs` (Intel log
 /// FLASER scans 300 … 323) as LD06 revolutions (one point per degree, clockwise from
 /// 0°; no return behind the laser and for the log's max-range readings), with the noise and
 /// the corrupted frames of the plan.
-pub fn stream() -> Result<Stream, String> {
+pub fn stream() -> Result<Stream> {
     let mut rng = host_tests::splitmix::SplitMix64::new(0x1d06_0000_5eed);
     let mut bytes = noise(&mut rng, STARTUP_NOISE);
     let mut noise_total = STARTUP_NOISE;
@@ -90,12 +88,12 @@ pub fn stream() -> Result<Stream, String> {
             .iter()
             .find(|&&r| r < MAX_RANGE_M && r > 65.535)
         {
-            return Err(format!(
+            return Err(Error::Host(format!(
                 "scan {k}: range {r} m does not fit an LD06 distance"
-            ));
+            )));
         }
         let n = ld06::encode_revolution(&samples, SPEED_DEG_PER_S, (k * 100) as u16, &mut rev)
-            .map_err(|e| format!("LD06 encoder: {e}"))?;
+            .map_err(|e| Error::Host(format!("LD06 encoder: {e}")))?;
         for (f, frame) in rev[..n].chunks(ld06::FRAME_LEN).enumerate() {
             let mut frame = frame.to_vec();
             for &(fs, ff, byte, bit) in &FLIPS {
@@ -159,25 +157,28 @@ pub struct Reference {
 }
 
 /// Decodes, assembles and scores `bytes` on the host exactly as the firmware does.
-pub fn reference(bytes: &[u8], blob: &[u8]) -> Result<Reference, String> {
-    let setup = lidar_plan::setup(blob, MAX_RANGE_M)?;
-    let mut assembler =
-        lidar_plan::assembler(&setup).map_err(|e| format!("assembler rejected: {e}"))?;
+pub fn reference(bytes: &[u8], blob: &[u8]) -> Result<Reference> {
+    let setup = lidar_plan::setup(blob, MAX_RANGE_M).map_err(|e| Error::Host(e.into()))?;
+    let mut assembler = lidar_plan::assembler(&setup)
+        .map_err(|e| Error::Host(format!("assembler rejected: {e}")))?;
     let mut decoder = Ld06Decoder::new();
     let mut weights = Box::new([0.0f32; POSES]);
     let mut scans = Vec::new();
     let mut one = |assembler: &beamfield::lidar::ScanAssembler<BEAMS>,
                    scans: &mut Vec<ScanRef>|
-     -> Result<(), String> {
+     -> Result<()> {
         let k = scans.len();
-        let demo = SCANS
-            .get(k)
-            .ok_or_else(|| format!("the host assembled more than {} scans", SCANS.len()))?;
+        let demo = SCANS.get(k).ok_or_else(|| {
+            Error::Host(format!(
+                "the host assembled more than {} scans",
+                SCANS.len()
+            ))
+        })?;
         let scan = assembler.scan();
         let logged = Pose::new(demo.pose[0], demo.pose[1], demo.pose[2]);
         let m = lidar_plan::compare(scan, &demo.ranges_m, MAX_RANGE_M);
         let s = lidar_plan::score(&setup, scan, &logged, &mut weights)
-            .map_err(|e| format!("scan {k}: {e}"))?;
+            .map_err(|e| Error::Host(format!("scan {k}: {e}")))?;
         let (d_m, dth_deg, _) = demo_plan::offset(&s.best, &logged);
         scans.push(ScanRef {
             head: format!(
@@ -246,24 +247,24 @@ fn between<'a>(line: &'a str, start: &str, end: &str) -> Option<&'a str> {
 
 /// Checks a printed number against the host's value printed with `decimals` digits (the
 /// firmware rounds to the nearest: they agree when within half a unit of the last digit).
-fn close(what: &str, printed: &str, host: f32, decimals: i32) -> Result<(), String> {
+fn close(what: &str, printed: &str, host: f32, decimals: i32) -> Result<()> {
     let p: f64 = printed
         .trim()
         .parse()
-        .map_err(|_| format!("{what}: cannot read {printed:?}"))?;
+        .map_err(|_| Error::Output(format!("{what}: cannot read {printed:?}")))?;
     let tol = 0.5 * 10f64.powi(-decimals) + 1e-9;
     if (p - f64::from(host)).abs() <= tol {
         Ok(())
     } else {
-        Err(format!(
+        Err(Error::Mismatch(format!(
             "{what}: device printed {printed}, host computes {host:.6}"
-        ))
+        )))
     }
 }
 
 /// Checks the device's report `out` against the host's `reference`, line by line: the
 /// integers exactly, the printed decimals to their last digit. Returns the number of scans.
-pub fn check(out: &str, r: &Reference) -> Result<usize, String> {
+pub fn check(out: &str, r: &Reference) -> Result<usize> {
     let lines: Vec<&str> = out.lines().collect();
     let scan_lines: Vec<&str> = lines
         .iter()
@@ -271,24 +272,26 @@ pub fn check(out: &str, r: &Reference) -> Result<usize, String> {
         .filter(|l| l.starts_with("scan "))
         .collect();
     if scan_lines.len() != r.scans.len() {
-        return Err(format!(
+        return Err(Error::Mismatch(format!(
             "the device reported {} scans, the host assembles {}",
             scan_lines.len(),
             r.scans.len()
-        ));
+        )));
     }
     for (k, (line, s)) in scan_lines.iter().zip(&r.scans).enumerate() {
         if !line.starts_with(&s.head) {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "scan {k}: the device printed\n  {line}\nthe host computes\n  {}…",
                 s.head
-            ));
+            )));
         }
         let pose = between(line, "best (", " deg)")
-            .ok_or_else(|| format!("scan {k}: no best pose in {line:?}"))?;
+            .ok_or_else(|| Error::Output(format!("scan {k}: no best pose in {line:?}")))?;
         let p: Vec<&str> = pose.split(", ").collect();
         let [x, y, t] = p.as_slice() else {
-            return Err(format!("scan {k}: cannot read the pose {pose:?}"));
+            return Err(Error::Output(format!(
+                "scan {k}: cannot read the pose {pose:?}"
+            )));
         };
         close(&format!("scan {k} best x"), x, s.best.x_m, 3)?;
         close(&format!("scan {k} best y"), y, s.best.y_m, 3)?;
@@ -299,12 +302,12 @@ pub fn check(out: &str, r: &Reference) -> Result<usize, String> {
             1,
         )?;
         let ll = between(line, "log-likelihood ", " ")
-            .ok_or_else(|| format!("scan {k}: no log-likelihood in {line:?}"))?;
+            .ok_or_else(|| Error::Output(format!("scan {k}: no log-likelihood in {line:?}")))?;
         close(&format!("scan {k} log-likelihood"), ll, s.log_likelihood, 3)?;
         let ess = line
             .rsplit_once("ESS ")
             .map(|(_, e)| e)
-            .ok_or_else(|| format!("scan {k}: no ESS in {line:?}"))?;
+            .ok_or_else(|| Error::Output(format!("scan {k}: no ESS in {line:?}")))?;
         close(&format!("scan {k} ESS"), ess, s.ess, 1)?;
     }
     for want in [&r.decoder, &r.assembler] {
@@ -312,11 +315,11 @@ pub fn check(out: &str, r: &Reference) -> Result<usize, String> {
         let got = lines
             .iter()
             .find(|l| l.starts_with(&format!("{key}:")))
-            .ok_or_else(|| format!("the device printed no `{key}:` line"))?;
+            .ok_or_else(|| Error::Output(format!("the device printed no `{key}:` line")))?;
         if got != want {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "the device printed\n  {got}\nthe host computes\n  {want}"
-            ));
+            )));
         }
     }
     Ok(r.scans.len())

@@ -1,25 +1,20 @@
 //! `cargo xtask track` and `cargo xtask track-assets`: the localizer on the device
 //! (`firmware/src/bin/track.rs`) under QEMU, recomputed on the host with the same library code
-//! and the same plan (`firmware/src/track_plan.rs`, shared word for word), and required to match
+//! and the same plan (`fixtures/src/track_plan.rs`, shared word for word), and required to match
 //! bit for bit; and the regeneration of its input asset.
 
-#[path = "../../firmware/src/track_plan.rs"]
-#[allow(dead_code)]
-mod track_plan;
-
-use super::budgets::{llvm_tool, sections};
-use super::demo::{build, build_and_run, qemu_failure, Board};
-use super::{cargo, repo_root, run, Result};
+use crate::cross::build_program;
+use crate::demo::build_and_run;
+use crate::elf::sections;
+use crate::error::{Error, Result};
+use crate::insncount::{run_counted, without_names, Regions};
+use crate::process::{cargo, repo_root, run, Finished};
+use crate::qemu::{failure, Board};
+use crate::toolchain::llvm_tool;
 use beamfield::mcl::Particles;
-use track_plan::{Step, Summary, TrackScan, PARTICLES};
-
-/// The generated input: the log's ranges are data, not approximations of constants.
-#[allow(clippy::approx_constant)]
-mod asset {
-    use super::TrackScan;
-    include!("../../firmware/assets/track.rs");
-}
-use asset::{MAX_RANGE_M, ODOM_ALPHA, SEED, TRACK};
+use beamfield_fixtures::regions::track as regions;
+use beamfield_fixtures::track_plan::{self, Step, Summary, PARTICLES};
+use track_plan::asset::{MAX_RANGE_M, ODOM_ALPHA, SEED, TRACK};
 
 /// Translation RMSE over the segment the run must stay under, metres. `beamfield track
 /// --field firmware/assets/intel.bin --scans 90 --seeds 10` gives 4.00 / 4.91 / 6.79 cm
@@ -60,7 +55,7 @@ fn summary_bits(s: &Summary) -> String {
 /// The host's run of the plan: one line per update and the summary.
 fn host_run() -> Result<(Vec<String>, Summary)> {
     let blob_path = repo_root().join("firmware/assets/intel.bin");
-    let blob = std::fs::read(&blob_path).map_err(|e| format!("{}: {e}", blob_path.display()))?;
+    let blob = std::fs::read(&blob_path).map_err(|e| Error::io(&blob_path, e))?;
     let mut store: Box<Particles<PARTICLES>> = Box::default();
     let mut lines = Vec::new();
     let sum = track_plan::run(
@@ -73,7 +68,7 @@ fn host_run() -> Result<(Vec<String>, Summary)> {
         |_| {},
         |s| lines.push(step_line(s)),
     )
-    .map_err(|e| format!("host run: {e}"))?;
+    .map_err(|e| Error::Host(format!("host run: {e}")))?;
     Ok((lines, sum))
 }
 
@@ -87,28 +82,28 @@ pub fn check(out: &str) -> Result<Vec<String>> {
     let (host, sum) = host_run()?;
     let device: Vec<&str> = out.lines().filter(|l| l.starts_with("update ")).collect();
     if device.len() != host.len() {
-        return Err(format!(
+        return Err(Error::Mismatch(format!(
             "the device printed {} update lines, the host computes {}",
             device.len(),
             host.len()
-        ));
+        )));
     }
     for (d, h) in device.iter().zip(&host) {
         if !d.starts_with(&format!("{h};")) {
-            return Err(format!(
+            return Err(Error::Mismatch(format!(
                 "the device and the host differ:\n  device: {d}\n  host:   {h}"
-            ));
+            )));
         }
     }
     let last = out
         .lines()
         .find(|l| l.starts_with("final error "))
-        .ok_or("the device printed no final line")?;
+        .ok_or_else(|| Error::Output("the device printed no final line".into()))?;
     let bits = summary_bits(&sum);
     if !last.contains(&bits) {
-        return Err(format!(
+        return Err(Error::Mismatch(format!(
             "final RMSE differs: the host computes {bits}, the device printed {last:?}"
-        ));
+        )));
     }
     let mut report = vec![format!(
         "host reference: {} updates recomputed on the host are bit-identical to the device's \
@@ -120,13 +115,13 @@ pub fn check(out: &str) -> Result<Vec<String>> {
         && sum.heading_rmse_deg <= MAX_HEADING_RMSE_DEG
         && sum.max_trans_m <= LOST_M)
     {
-        return Err(format!(
+        return Err(Error::Requirement(format!(
             "tracking: RMSE {rmse_cm:.2} cm, {:.3}°, largest error {:.3} m: over the bounds \
              ({:.0} cm, {MAX_HEADING_RMSE_DEG}°, {LOST_M} m)",
             sum.heading_rmse_deg,
             sum.max_trans_m,
             MAX_RMSE_M * 100.0
-        ));
+        )));
     }
     report.push(format!(
         "tracking: RMSE {rmse_cm:.2} cm and {:.3}° over the segment (bounds {:.0} cm, \
@@ -145,8 +140,12 @@ pub fn check(out: &str) -> Result<Vec<String>> {
 /// host's recomputation.
 pub fn track(board: Board) -> Result {
     let machine = board.machine();
-    let (code, out, err) = build_and_run(board, "track")?;
-    print!("{out}");
+    let Finished {
+        code,
+        stdout: out,
+        stderr: err,
+    } = build_and_run(board, "track", &[])?;
+    print!("{}", without_names(&out));
     eprint!("{err}");
     match code {
         0 => {
@@ -155,35 +154,26 @@ pub fn track(board: Board) -> Result {
             }
             Ok(())
         }
-        c => Err(qemu_failure(
-            c,
-            "the track",
-            machine,
-            "its input was rejected",
-        )),
+        c => Err(failure(c, "the track", machine, "its input was rejected")),
     }
 }
 
 /// Instructions per particle per update from the counting plugin's regions of the track
-/// program: per scan the prediction (none for the first), the scoring alone, the whole update.
-/// Returns `(motion, scoring alone, update with scoring)` averaged over the scans, per particle.
-fn per_particle(counts: &[u64]) -> Result<(f64, f64, f64)> {
+/// program, by name: per scan the prediction (none for the first), the scoring alone, the whole
+/// update. Returns `(motion, scoring alone, update with scoring)` averaged over the scans, per
+/// particle.
+fn per_particle(counted: &Regions) -> Result<(f64, f64, f64)> {
     let scans = TRACK.len();
-    if counts.len() != 3 * scans - 1 {
-        return Err(format!(
-            "expected {} measured regions for {scans} scans, the plugin reported {}",
-            3 * scans - 1,
-            counts.len()
-        ));
-    }
-    let (mut motion, mut score, mut update) = (0u64, 0u64, 0u64);
-    // Scan 0: scoring, update; then per scan: prediction, scoring, update.
-    for (i, &n) in counts.iter().enumerate() {
-        match (i + 1) % 3 {
-            0 => motion += n,
-            1 => score += n,
-            _ => update += n,
-        }
+    counted.expect(&regions::ALL)?;
+    let (motion, predictions) = counted.sum(regions::PREDICT.name);
+    let (score, scorings) = counted.sum(regions::SCORING.name);
+    let (update, updates) = counted.sum(regions::UPDATE.name);
+    if (predictions, scorings, updates) != (scans - 1, scans, scans) {
+        return Err(Error::Regions(format!(
+            "expected {} predictions and {scans} scorings and updates for {scans} scans, the \
+             firmware measured {predictions}, {scorings} and {updates}",
+            scans - 1
+        )));
     }
     let p = PARTICLES as f64;
     Ok((
@@ -197,18 +187,22 @@ fn per_particle(counts: &[u64]) -> Result<(f64, f64, f64)> {
 /// the host as [`track`] does, and prints the instructions per particle per update (scoring
 /// included and excluded) and the program's RAM (`.data`, `.bss`, `.uninit` by `llvm-size`).
 pub fn track_insns(board: Board) -> Result {
-    let elf = build(board, "track")?;
-    let (code, out, err) = crate::insncount::run_counted(&elf, board.machine(), "track-insns")?;
-    if code != 0 {
-        print!("{out}");
-        eprint!("{err}");
-        return Err(format!("the counting run exited {code}"));
+    let elf = build_program(board, "track", &[])?;
+    let run = run_counted(&elf, board.machine(), "track-insns")?;
+    if run.code != 0 {
+        print!("{}", run.stdout);
+        eprint!("{}", run.stderr);
+        return Err(failure(
+            run.code,
+            "the counting run",
+            board.machine(),
+            "see its output",
+        ));
     }
-    for line in check(&out)? {
+    for line in check(&run.stdout)? {
         println!("{line}");
     }
-    let counts = crate::insncount::region_counts(&err);
-    let (motion, score, update) = per_particle(&counts)?;
+    let (motion, score, update) = per_particle(&Regions::read(&run.stdout, &run.stderr)?)?;
     let beams = track_plan::BEAMS as f64;
     println!(
         "instructions per particle per update ({} scans, {PARTICLES} particles, {}):",
@@ -249,7 +243,7 @@ pub fn track_insns(board: Board) -> Result {
     Ok(())
 }
 
-/// Regenerates `firmware/assets/track.rs` from the Intel lab log beside the repository.
+/// Regenerates `fixtures/assets/track.rs` from the Intel lab log beside the repository.
 pub fn track_assets() -> Result {
     let root = repo_root();
     run(cargo().current_dir(&root).args([
@@ -261,7 +255,7 @@ pub fn track_assets() -> Result {
         "track_assets",
         "--",
         "data/laser_intel_lab/intel-corrected.log",
-        "firmware/assets/track.rs",
+        "fixtures/assets/track.rs",
     ]))
 }
 

@@ -7,9 +7,10 @@
 //! beams 180–359 (behind the laser) are ray cast through the blob from the logged pose. The
 //! hypotheses are `POSES` poses on a line near the logged pose.
 //!
-//! Measured regions, in order, each between `bench_mark_start`/`bench_mark_end` (the plugin
-//! numbers them from 0); before them the program prints one line per region,
-//! `budget: region <i> <name> poses <p> beams <b>`, so the task pairs counts with names:
+//! Measured regions, in order, each between `bench_mark_start`/`bench_mark_end` and named right
+//! before it (`start_region`, the names of `beamfield_fixtures::regions::budget`; the task takes
+//! the counts by name); before them the program prints one line per region,
+//! `budget: region <name> poses <p> beams <b>`:
 //! `lf` and `lf-half` (the likelihood field over every beam and over every second one: their
 //! difference is the marginal cost of a beam), `tempered` (the tempered likelihood field),
 //! `normalize` (normalizing `POSES` log-weights), `beam` and `beam-half` (the beam model with
@@ -28,25 +29,14 @@ use beamfield::{
     LikelihoodField, LikelihoodParams, Pose, PreparedScan, RayCaster, Scan, SensorModel,
     SensorMount, Stride, Tempered,
 };
-use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println};
+use beamfield_firmware::{bench_mark_end, exit, println, start_region};
+use beamfield_fixtures::regions::budget;
 use core::hint::black_box;
 use cortex_m_rt::entry;
 use panic_semihosting as _;
 
-/// One real scan of the log with its logged (corrected) laser pose (as in `demo.rs`).
-pub struct DemoScan {
-    /// Index of the FLASER line in the log.
-    pub log_index: u32,
-    /// Logged laser pose `[x_m, y_m, theta_rad]`.
-    pub pose: [f32; 3],
-    /// The ranges, metres.
-    pub ranges_m: [f32; LOG_BEAMS],
-}
-
-/// Beams of a FLASER scan of the Intel log.
-const LOG_BEAMS: usize = 180;
-
-include!("../../assets/scans.rs");
+use beamfield_fixtures::demo_scans::{MAX_RANGE_M, SCANS};
+use beamfield_fixtures::intel_setup::BEAMS as LOG_BEAMS;
 
 /// The 5 cm distance field of the Intel map.
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
@@ -140,12 +130,13 @@ fn call_beam(c: &mut Ctx<'_>) -> f32 {
     c.beam.score(&c.layout, &c.scan, &c.poses[0]).log_likelihood
 }
 
-/// Sum of `model`'s log-likelihoods over the hypotheses with `stride`, between the markers.
-fn region<M: SensorModel<BEAMS>>(c: &Ctx<'_>, model: &M, stride: Stride) -> f32 {
+/// Sum of `model`'s log-likelihoods over the hypotheses with `stride`, between the markers of
+/// the region `name`.
+fn region<M: SensorModel<BEAMS>>(name: &str, c: &Ctx<'_>, model: &M, stride: Stride) -> f32 {
     let layout = black_box(&c.layout);
     let scan = black_box(&c.scan);
     let poses = black_box(&c.poses);
-    bench_mark_start();
+    start_region!(name);
     let mut sum = 0.0f32;
     for pose in poses {
         sum += model
@@ -156,11 +147,12 @@ fn region<M: SensorModel<BEAMS>>(c: &Ctx<'_>, model: &M, stride: Stride) -> f32 
     sum
 }
 
-/// Sum of a prepared scan's log-likelihoods over the hypotheses, between the markers.
-fn prepared_region(prepared: &PreparedScan<'_, BEAMS>, poses: &[Pose; POSES]) -> f32 {
+/// Sum of a prepared scan's log-likelihoods over the hypotheses, between the markers of the
+/// region `name`.
+fn prepared_region(name: &str, prepared: &PreparedScan<'_, BEAMS>, poses: &[Pose; POSES]) -> f32 {
     let prepared = black_box(prepared);
     let poses = black_box(poses);
-    bench_mark_start();
+    start_region!(name);
     let mut sum = 0.0f32;
     for pose in poses {
         sum += prepared.score(pose).log_likelihood;
@@ -244,25 +236,22 @@ fn main() -> ! {
     let prepared = ctx.field.prepare(&ctx.layout, &ctx.scan);
     let prepared_half = ctx.field.prepare_strided(&ctx.layout, &ctx.scan, half);
     let names: [(&str, usize); 8] = [
-        ("lf", BEAMS),
-        ("lf-half", BEAMS.div_ceil(2)),
-        ("tempered", BEAMS),
-        ("normalize", 0),
-        ("beam", BEAMS),
-        ("beam-half", BEAMS.div_ceil(2)),
-        ("lf-prepared", prepared.len()),
-        ("lf-prepared-half", prepared_half.len()),
+        (budget::LF.name, BEAMS),
+        (budget::LF_HALF.name, BEAMS.div_ceil(2)),
+        (budget::TEMPERED.name, BEAMS),
+        (budget::NORMALIZE.name, 0),
+        (budget::BEAM.name, BEAMS),
+        (budget::BEAM_HALF.name, BEAMS.div_ceil(2)),
+        (budget::LF_PREPARED.name, prepared.len()),
+        (budget::LF_PREPARED_HALF.name, prepared_half.len()),
     ];
-    for (i, (name, beams)) in names.iter().enumerate() {
-        println!(
-            "budget: region {} {} poses {} beams {}",
-            i, name, POSES, beams
-        );
+    for (name, beams) in names {
+        println!("budget: region {} poses {} beams {}", name, POSES, beams);
     }
 
-    let lf = region(&ctx, &ctx.field, Stride::ONE);
-    let lf_half = region(&ctx, &ctx.field, half);
-    let tempered = region(&ctx, &ctx.tempered, Stride::ONE);
+    let lf = region(budget::LF.name, &ctx, &ctx.field, Stride::ONE);
+    let lf_half = region(budget::LF_HALF.name, &ctx, &ctx.field, half);
+    let tempered = region(budget::TEMPERED.name, &ctx, &ctx.tempered, Stride::ONE);
     let mut weights = [0.0f32; POSES];
     for (w, pose) in weights.iter_mut().zip(&ctx.poses) {
         *w = ctx
@@ -271,13 +260,14 @@ fn main() -> ! {
             .log_likelihood;
     }
     let w = black_box(&mut weights);
-    bench_mark_start();
+    start_region!(budget::NORMALIZE.name);
     let norm = normalize_log_weights(w);
     bench_mark_end();
-    let beam = region(&ctx, &ctx.beam, Stride::ONE);
-    let beam_half = region(&ctx, &ctx.beam, half);
-    let lf_prepared = prepared_region(&prepared, &ctx.poses);
-    let lf_prepared_half = prepared_region(&prepared_half, &ctx.poses);
+    let beam = region(budget::BEAM.name, &ctx, &ctx.beam, Stride::ONE);
+    let beam_half = region(budget::BEAM_HALF.name, &ctx, &ctx.beam, half);
+    let lf_prepared = prepared_region(budget::LF_PREPARED.name, &prepared, &ctx.poses);
+    let lf_prepared_half =
+        prepared_region(budget::LF_PREPARED_HALF.name, &prepared_half, &ctx.poses);
     let ok_counts = [
         lf,
         lf_half,

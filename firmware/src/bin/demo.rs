@@ -1,7 +1,7 @@
 //! The demo a user flashes: pose scoring with the tempered likelihood field on real Intel-lab
 //! scans, against a distance-field blob of the Intel map linked into flash.
 //!
-//! For each embedded scan (`firmware/assets/scans.rs`, standing in for the sensor driver) it
+//! For each embedded scan (`fixtures/assets/scans.rs`, standing in for the sensor driver) it
 //! scores a grid of pose hypotheses around the logged pose (±20 cm in 2.5 cm steps, ±5° in 0.5°
 //! steps: 17 × 17 × 21 = 6,069 poses), normalizes the weights in place, and reports the best pose,
 //! its offset from the logged pose, the effective sample size, the lag-1 diagnostic at the best
@@ -39,27 +39,12 @@ use panic_semihosting as _;
 #[cfg(feature = "defmt")]
 use panic_probe as _;
 
-/// One real scan of the log with its logged (corrected) laser pose.
-pub struct DemoScan {
-    /// Index of the FLASER line in the log.
-    pub log_index: u32,
-    /// Logged laser pose `[x_m, y_m, theta_rad]`.
-    pub pose: [f32; 3],
-    /// The 180 ranges, metres (the log's max-range value means "no return").
-    pub ranges_m: [f32; BEAMS],
-}
-
-/// Beams per FLASER scan of the Intel log.
-const BEAMS: usize = 180;
-
-include!("../../assets/scans.rs");
-
-#[path = "../demo_plan.rs"]
-mod demo_plan;
-use demo_plan::{
+use beamfield_fixtures::demo_plan::{
     fine_search, offset, ACCEPT_DEG, ACCEPT_M, COARSE, FINE, KAPPA, POSES, SIGMA_HIT_M, Z_HIT,
     Z_RAND,
 };
+use beamfield_fixtures::demo_scans::{MAX_RANGE_M, SCANS};
+use beamfield_fixtures::intel_setup::BEAMS;
 
 /// The 5 cm distance field of the Intel map (see `docs/demo.md`), one byte per cell.
 #[cfg(not(feature = "tiled"))]

@@ -2,14 +2,15 @@
 //! between `bench_mark_start`/`bench_mark_end`, after three baselines measured the same way.
 //! Run under the QEMU counting plugin by `cargo xtask insns`, which divides by the beam count.
 //!
-//! Regions, in order (the plugin numbers them from 0):
+//! Regions, in order, each named right before it is measured (`start_region`, with the names of
+//! `beamfield_fixtures::regions::insns`; `cargo xtask insns` takes the counts by name):
 //! 0. empty loop: sum the ranges, +∞ read as the max range (the loop and load cost alone);
 //! 1. `beamfield::math::ln` of each range (the host bench's baseline);
 //! 2. `beamfield::math::exp` of each range;
 //! 3. `BeamModel::scan_log_likelihood`: the beam mixture, AMCL default intrinsics, 30 m lidar.
 //!
 //! Then the likelihood field over the Intel map blob the demo links (`assets/intel.bin`) and
-//! the demo's 8 real 180-beam scans (`assets/scans.rs`), each at `POSES_PER_SCAN` poses
+//! the demo's 8 real 180-beam scans (`fixtures/assets/scans.rs`), each at `POSES_PER_SCAN` poses
 //! scattered around its logged pose (±25 cm, ±10°):
 //! 4. `LikelihoodField::prepare` of the 8 scans (divided by beam slots);
 //! 5. empty loop over the prepared endpoints at every pose (the loop and load cost alone);
@@ -39,7 +40,7 @@
 //! 16. XV-11 decode plus assembly;
 //! 17. YDLIDAR decode (triangulation angle correction) plus assembly.
 //!
-//! The last line printed gives each region's divisor (`insns divisors: …`), which
+//! The last lines printed give each region's divisor by name (`insns divisor: NAME N`), which
 //! `cargo xtask insns` reads.
 #![no_std]
 #![no_main]
@@ -48,7 +49,8 @@ use beamfield::{
     math, BeamIntrinsics, BeamLayout, BeamModel, FieldView, LikelihoodField, LikelihoodParams,
     Pose, PreparedScan, Scan, SensorMount,
 };
-use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println, Fixed};
+use beamfield_firmware::{bench_mark_end, exit, println, start_region, Fixed};
+use beamfield_fixtures::regions::insns;
 use core::hint::black_box;
 use cortex_m_rt::entry;
 use panic_semihosting as _;
@@ -58,20 +60,10 @@ pub const BEAMS: usize = 360;
 /// The sensor's maximum range, metres.
 const MAX_RANGE_M: f32 = 30.0;
 
-/// The demo's real scans (their own 180-beam type, as the demo declares it).
+/// The demo's real scans (180 beams each) and the log's maximum range.
 mod real {
-    /// Beams per FLASER scan of the Intel log.
-    pub const BEAMS: usize = 180;
-    /// One real scan of the log with its logged laser pose.
-    pub struct DemoScan {
-        /// Index of the FLASER line in the log.
-        pub log_index: u32,
-        /// Logged laser pose `[x_m, y_m, theta_rad]`.
-        pub pose: [f32; 3],
-        /// The ranges, metres.
-        pub ranges_m: [f32; BEAMS],
-    }
-    include!("../../assets/scans.rs");
+    pub use beamfield_fixtures::demo_scans::{MAX_RANGE_M, SCANS};
+    pub use beamfield_fixtures::intel_setup::BEAMS;
 }
 
 /// The 5 cm distance field of the Intel map, as the demo links it.
@@ -119,6 +111,7 @@ fn synthetic(rng: &mut Rng, ranges: &mut [f32; BEAMS], z_star: &mut [f32; BEAMS]
 /// `None` when the assembler rejected the layout.
 #[inline(always)]
 fn decode_assemble_region<D, const N: usize>(
+    region: &str,
     stream: &[u8],
     layout: &BeamLayout<N>,
     config: beamfield::lidar::AssemblerConfig,
@@ -126,7 +119,7 @@ fn decode_assemble_region<D, const N: usize>(
 where
     D: beamfield::lidar::StreamDecoder + Default,
 {
-    bench_mark_start();
+    start_region!(region);
     let mut dec = D::default();
     let mut asm = beamfield::lidar::ScanAssembler::new(layout, config).ok()?;
     let mut scans = 0u32;
@@ -176,14 +169,14 @@ fn lidar_regions() -> Option<[usize; 4]> {
     }
     let ld06_len = n;
     let stream = black_box(buf.get(..n)?);
-    bench_mark_start();
+    start_region!(insns::EMPTY_BYTES.name);
     let mut sum = 0u32;
     for &b in stream {
         sum = sum.wrapping_add(u32::from(b));
     }
     bench_mark_end();
     let sum = black_box(sum);
-    bench_mark_start();
+    start_region!(insns::LD06_DECODE.name);
     let mut dec = Ld06Decoder::new();
     let mut pts = 0u32;
     dec.feed(stream, |p| {
@@ -191,8 +184,12 @@ fn lidar_regions() -> Option<[usize; 4]> {
         pts += 1;
     });
     bench_mark_end();
-    let (ld06_scans, ld06_accepted) =
-        decode_assemble_region::<Ld06Decoder, _>(stream, &layout, config)?;
+    let (ld06_scans, ld06_accepted) = decode_assemble_region::<Ld06Decoder, _>(
+        insns::LD06_ASSEMBLE.name,
+        stream,
+        &layout,
+        config,
+    )?;
 
     // RPLIDAR: the scan descriptor, then nodes.
     let mut n = 0;
@@ -204,8 +201,12 @@ fn lidar_regions() -> Option<[usize; 4]> {
     }
     let rp_len = n;
     let stream = black_box(buf.get(..n)?);
-    let (rp_scans, rp_accepted) =
-        decode_assemble_region::<RplidarDecoder, _>(stream, &layout, config)?;
+    let (rp_scans, rp_accepted) = decode_assemble_region::<RplidarDecoder, _>(
+        insns::RPLIDAR_ASSEMBLE.name,
+        stream,
+        &layout,
+        config,
+    )?;
 
     // XV-11 at 300 rpm.
     let mut n = 0;
@@ -217,8 +218,12 @@ fn lidar_regions() -> Option<[usize; 4]> {
     }
     let xv_len = n;
     let stream = black_box(buf.get(..n)?);
-    let (xv_scans, xv_accepted) =
-        decode_assemble_region::<Xv11Decoder, _>(stream, &layout, config)?;
+    let (xv_scans, xv_accepted) = decode_assemble_region::<Xv11Decoder, _>(
+        insns::XV11_ASSEMBLE.name,
+        stream,
+        &layout,
+        config,
+    )?;
 
     // YDLIDAR (region 17): a zero packet and packets of 40 samples per revolution, at uniform
     // rotor angles; the decoder applies the X4's triangulation correction (an `atanf` per
@@ -233,7 +238,7 @@ fn lidar_regions() -> Option<[usize; 4]> {
     let (yd_scans, yd_accepted) = decode_assemble_region::<
         beamfield::lidar::ydlidar::YdlidarDecoder,
         _,
-    >(stream, &layout, config)?;
+    >(insns::YDLIDAR_ASSEMBLE.name, stream, &layout, config)?;
 
     println!(
         "insns: lidar: {} real scans as revolutions of {} points; byte sum {}; ld06 {} bytes, {} points, {} scans, {} ranges binned; rplidar {} bytes, {} scans, {} binned; xv11 {} bytes, {} scans, {} binned; ydlidar {} bytes, {} scans, {} binned",
@@ -312,7 +317,7 @@ fn beam_model_with_ray_casting() -> Option<(f32, usize)> {
     }
     let scans = black_box(&scans);
 
-    bench_mark_start();
+    start_region!(insns::BEAM_RAY_CAST.name);
     let mut sum = 0.0f32;
     let mut scored = 0usize;
     for (scan, pose) in scans.iter().flatten() {
@@ -340,7 +345,7 @@ fn tiled_regions(
     let prepared: [PreparedScan<'_, { real::BEAMS }>; REAL_SCANS] =
         core::array::from_fn(|i| field.prepare(layout, black_box(&scans[i % REAL_SCANS])));
 
-    bench_mark_start();
+    start_region!(insns::LF_PREPARED_TILED.name);
     let mut sum = 0.0f32;
     for (prep, ps) in prepared.iter().zip(poses) {
         for p in ps {
@@ -349,7 +354,7 @@ fn tiled_regions(
     }
     bench_mark_end();
 
-    bench_mark_start();
+    start_region!(insns::LF_PREPARED_NO_BEAMS_TILED.name);
     let mut overhead = 0.0f32;
     for ps in poses {
         for p in ps {
@@ -378,7 +383,7 @@ fn main() -> ! {
     let ranges = black_box(scan.ranges_m());
     let finite = |z: f32| if z < MAX_RANGE_M { z } else { MAX_RANGE_M };
 
-    bench_mark_start();
+    start_region!(insns::EMPTY_LOOP.name);
     let mut sum = 0.0f32;
     for &z in ranges {
         sum += black_box(finite(z));
@@ -386,7 +391,7 @@ fn main() -> ! {
     bench_mark_end();
     let empty = sum;
 
-    bench_mark_start();
+    start_region!(insns::LN.name);
     let mut sum = 0.0f32;
     for &z in ranges {
         sum += math::ln(black_box(finite(z)));
@@ -394,7 +399,7 @@ fn main() -> ! {
     bench_mark_end();
     let ln_sum = sum;
 
-    bench_mark_start();
+    start_region!(insns::EXP.name);
     let mut sum = 0.0f32;
     for &z in ranges {
         sum += math::exp(-black_box(finite(z)));
@@ -402,7 +407,7 @@ fn main() -> ! {
     bench_mark_end();
     let exp_sum = sum;
 
-    bench_mark_start();
+    start_region!(insns::BEAM_MIXTURE.name);
     let score = model.scan_log_likelihood(black_box(&scan), black_box(&z_star[..]));
     bench_mark_end();
 
@@ -448,14 +453,14 @@ fn main() -> ! {
     };
     let empty_prep = field.prepare(&layout, &no_return);
 
-    bench_mark_start();
+    start_region!(insns::LF_PREPARE.name);
     let prepared: [PreparedScan<'_, { real::BEAMS }>; REAL_SCANS] =
         core::array::from_fn(|i| field.prepare(&layout, black_box(&scans[i % REAL_SCANS])));
     bench_mark_end();
     let kept: usize = prepared.iter().map(PreparedScan::len).sum();
     let evaluations = kept * POSES_PER_SCAN;
 
-    bench_mark_start();
+    start_region!(insns::EMPTY_PREPARED.name);
     let mut acc = 0i32;
     for (prep, ps) in prepared.iter().zip(&poses) {
         for p in ps {
@@ -468,7 +473,7 @@ fn main() -> ! {
     bench_mark_end();
     let empty_real = black_box(acc);
 
-    bench_mark_start();
+    start_region!(insns::LF_PREPARED.name);
     let mut lf_sum = 0.0f32;
     for (prep, ps) in prepared.iter().zip(&poses) {
         for p in ps {
@@ -477,7 +482,7 @@ fn main() -> ! {
     }
     bench_mark_end();
 
-    bench_mark_start();
+    start_region!(insns::LF_PREPARED_NO_BEAMS.name);
     let mut overhead_sum = 0.0f32;
     for ps in &poses {
         for p in ps {
@@ -486,7 +491,7 @@ fn main() -> ! {
     }
     bench_mark_end();
 
-    bench_mark_start();
+    start_region!(insns::LF_PER_POSE.name);
     let mut old_sum = 0.0f32;
     for (scan, ps) in scans.iter().zip(&poses) {
         for p in ps {
@@ -558,29 +563,37 @@ fn main() -> ! {
         println!("insns: regions 12-17: a LiDAR encoder, layout or decoded count was wrong");
         exit(false)
     };
-    // Divisors of each region for `cargo xtask insns`: beams, beam slots, beam evaluations,
-    // poses, bytes.
-    println!(
-        "insns divisors: {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {} {}",
-        BEAMS,
-        BEAMS,
-        BEAMS,
-        BEAMS,
-        REAL_SCANS * real::BEAMS,
-        evaluations,
-        evaluations,
-        REAL_SCANS * POSES_PER_SCAN,
-        evaluations,
-        real::SCANS.len() * real::BEAMS,
-        evaluations,
-        REAL_SCANS * POSES_PER_SCAN,
-        ld06_len,
-        ld06_len,
-        ld06_len,
-        rp_len,
-        xv_len,
-        yd_len
-    );
+    // Divisors of each region for `cargo xtask insns`, by name: beams, beam slots, beam
+    // evaluations, poses, bytes.
+    let divisors = [
+        (insns::EMPTY_LOOP.name, BEAMS),
+        (insns::LN.name, BEAMS),
+        (insns::EXP.name, BEAMS),
+        (insns::BEAM_MIXTURE.name, BEAMS),
+        (insns::LF_PREPARE.name, REAL_SCANS * real::BEAMS),
+        (insns::EMPTY_PREPARED.name, evaluations),
+        (insns::LF_PREPARED.name, evaluations),
+        (
+            insns::LF_PREPARED_NO_BEAMS.name,
+            REAL_SCANS * POSES_PER_SCAN,
+        ),
+        (insns::LF_PER_POSE.name, evaluations),
+        (insns::BEAM_RAY_CAST.name, real::SCANS.len() * real::BEAMS),
+        (insns::LF_PREPARED_TILED.name, evaluations),
+        (
+            insns::LF_PREPARED_NO_BEAMS_TILED.name,
+            REAL_SCANS * POSES_PER_SCAN,
+        ),
+        (insns::EMPTY_BYTES.name, ld06_len),
+        (insns::LD06_DECODE.name, ld06_len),
+        (insns::LD06_ASSEMBLE.name, ld06_len),
+        (insns::RPLIDAR_ASSEMBLE.name, rp_len),
+        (insns::XV11_ASSEMBLE.name, xv_len),
+        (insns::YDLIDAR_ASSEMBLE.name, yd_len),
+    ];
+    for (name, divisor) in divisors {
+        println!("{}{} {}", insns::DIVISOR_LINE, name, divisor);
+    }
     exit(
         score.log_likelihood.is_finite()
             && usize::from(score.scored) == BEAMS

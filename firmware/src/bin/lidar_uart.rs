@@ -13,9 +13,9 @@
 //! `ScanAssembler` on the Intel log's layout (180 beams, −90° … +89° counter-clockwise, sensor
 //! at the centre), a chunk at a time (`Ld06Decoder::feed`). Decoding and assembly run between
 //! the instruction-count markers; the scans finished in the chunk are queued and then scored
-//! (`lidar_plan.rs`, shared with the host's recomputation): the demo's tempered likelihood field at every pose of its coarse grid around
+//! (`fixtures/src/lidar_plan.rs`, shared with the host's recomputation): the demo's tempered likelihood field at every pose of its coarse grid around
 //! the scan's logged pose, and compared beam by beam with the log's ranges
-//! (`assets/lidar_segment.rs`: the 24 consecutive scans of the log the host encoded, with their
+//! (`fixtures/assets/lidar_segment.rs`: the 24 consecutive scans of the log the host encoded, with their
 //! logged poses). After each chunk, with the feature `decode-split`, a
 //! second decoder alone goes over the chunk (to split the cost between decoding and assembly),
 //! then the chunk's CRC-32 is counted as a baseline. At the end: the assembler's pending revolution, the decoder's and the
@@ -31,16 +31,13 @@ use beamfield::lidar::ld06::Ld06Decoder;
 use beamfield::lidar::ScanAssembler;
 use beamfield::{Pose, Scan};
 use beamfield_firmware::usart::{UsartRx, LD06_CONFIG};
-use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println, Fixed};
+use beamfield_firmware::{bench_mark_end, exit, println, start_region, Fixed};
+use beamfield_fixtures::regions::lidar;
 use cortex_m_rt::entry;
 use panic_semihosting as _;
 
-#[path = "../demo_plan.rs"]
-#[allow(dead_code)]
-mod demo_plan;
-#[path = "../lidar_plan.rs"]
-mod lidar_plan;
-use demo_plan::{offset, POSES};
+use beamfield_fixtures::demo_plan::{offset, POSES};
+use beamfield_fixtures::lidar_plan;
 use lidar_plan::segment::{MAX_RANGE_M, SCANS};
 use lidar_plan::{Setup, BEAMS};
 
@@ -243,7 +240,7 @@ fn main() -> ! {
         }
         // Decode and assemble between the counting markers; the scans finished in the chunk
         // are scored after the region.
-        bench_mark_start();
+        start_region!(lidar::DECODE_ASSEMBLE.name);
         decode_chunk(&mut decoder, &mut assembler, chunk, &mut queue);
         bench_mark_end();
         regions += 1;
@@ -261,13 +258,13 @@ fn main() -> ! {
         // the main path, and so its count.
         #[cfg(feature = "decode-split")]
         {
-            bench_mark_start();
+            start_region!(lidar::DECODE_ALONE.name);
             decode_only_points += decode_alone(&mut decode_only, chunk);
             bench_mark_end();
             regions += 1;
         }
         // The baseline of the same run: a table-driven CRC-32 over the same bytes.
-        bench_mark_start();
+        start_region!(lidar::CRC.name);
         crc_chunk(&mut digest, chunk);
         bench_mark_end();
         regions += 1;
@@ -276,7 +273,7 @@ fn main() -> ! {
         chunks += 1;
     }
     // The end of the recording: the pending revolution.
-    bench_mark_start();
+    start_region!(lidar::FINISH.name);
     let last = assembler.finish().is_some();
     bench_mark_end();
     regions += 1;

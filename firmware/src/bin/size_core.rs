@@ -3,14 +3,8 @@
 //! beam model with ray casting), the skeleton is the same program without the scoring calls.
 //! `cargo xtask budgets` subtracts their `llvm-size -A` sections. Built with the feature
 //! `nopanic`, it is the link-time proof that the scoring core cannot panic (`cargo xtask
-//! nopanic`). Body: `firmware/src/size_common.rs`.
+//! nopanic`). Body: `beamfield_firmware::size_program!` (firmware/src/size_program.rs).
 #![no_std]
 #![no_main]
 
-/// This program calls the scoring core.
-const SCORE: bool = true;
-
-/// This program links the beam model.
-const BEAM_MODEL: bool = true;
-
-include!("../size_common.rs");
+beamfield_firmware::size_program!(score: true, beam_model: true);

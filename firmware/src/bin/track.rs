@@ -1,10 +1,10 @@
 //! The localizer on the device: Monte Carlo localization ([`beamfield::mcl`]) of a real Intel
 //! lab log segment, bit for bit the run the host recomputes.
 //!
-//! The input (`firmware/assets/track.rs`, standing in for the sensor and wheel drivers) is the
+//! The input (`fixtures/assets/track.rs`, standing in for the sensor and wheel drivers) is the
 //! log's first 90 scans, a loop of the corridor with four corners, with their logged poses and
 //! the odometry `beamfield track` synthesizes for the same seed. The run is that of
-//! `src/track_plan.rs`, shared word for word with `cargo xtask track`, which recomputes it on
+//! `fixtures/src/track_plan.rs`, shared word for word with `cargo xtask track`, which recomputes it on
 //! the host and requires every printed bit pattern to match.
 //!
 //! Per update it prints the estimate `(x, y, θ)` and the effective sample size as f32 bit
@@ -19,24 +19,15 @@
 #![no_main]
 
 use beamfield::mcl::Particles;
-use beamfield_firmware::{bench_mark_end, bench_mark_start, exit, println, Fixed};
+use beamfield_firmware::{bench_mark_end, exit, println, start_region, Fixed};
 use cortex_m_rt::entry;
 #[cfg(feature = "defmt")]
 use panic_probe as _;
 #[cfg(not(feature = "defmt"))]
 use panic_semihosting as _;
 
-#[path = "../track_plan.rs"]
-mod track_plan;
-use track_plan::{run, Step, TrackScan, BEAMS, KAPPA, PARTICLES};
-
-/// The generated input: the log's ranges are data, not approximations of constants.
-#[allow(clippy::approx_constant)]
-mod asset {
-    use super::TrackScan;
-    include!("../../assets/track.rs");
-}
-use asset::{MAX_RANGE_M, ODOM_ALPHA, SEED, TRACK};
+use beamfield_fixtures::track_plan::asset::{MAX_RANGE_M, ODOM_ALPHA, SEED, TRACK};
+use beamfield_fixtures::track_plan::{run, Mark, Step, BEAMS, KAPPA, PARTICLES};
 
 /// The 5 cm distance field of the Intel map (the demo's, see `docs/demo.md`).
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
@@ -81,12 +72,9 @@ fn main() -> ! {
         Fixed::new(f64::from(ODOM_ALPHA), 3),
         SEED,
     );
-    let mark = |start: bool| {
-        if start {
-            bench_mark_start()
-        } else {
-            bench_mark_end()
-        }
+    let mark = |m: Mark| match m {
+        Mark::Start(name) => start_region!(name),
+        Mark::End => bench_mark_end(),
     };
     match run(
         store,

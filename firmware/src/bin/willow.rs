@@ -14,9 +14,7 @@ use beamfield_firmware::{exit, println};
 use cortex_m_rt::entry;
 use panic_semihosting as _;
 
-#[path = "../willow_plan.rs"]
-mod willow_plan;
-use willow_plan::{run, Scores, POSES};
+use beamfield_fixtures::willow_plan::{run, Scores, POSES};
 
 /// The Willow Garage field, tiled (`beamfield field build … --encoding tiled`).
 static BLOB: &[u8] = include_bytes!("../../assets/willow-tiled.bin");

@@ -1,7 +1,7 @@
 //! One pass of each variant the race times, over all of the race's scans (91 Intel scans, 16,380
 //! beams): shared by `benches/race.rs` (criterion) and `examples/race_timing.rs` (alternated
 //! rounds), so both time the same code. Each returns a sum of what it computed, for
-//! `black_box`. Included with `#[path]` next to `intel_race` and `amcl_beam`.
+//! `black_box`.
 
 use crate::amcl_beam::AmclBeam;
 use crate::intel_race::{RaceData, N};

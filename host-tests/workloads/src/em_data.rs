@@ -1,5 +1,4 @@
-//! The EM bench's data set, shared by `benches/em.rs` and `examples/em_profile.rs` (included
-//! with `#[path]`), so that the instruction counts are of exactly the bench's workload.
+//! The EM bench's data set, shared by `benches/em.rs` and `examples/em_profile.rs`, so that the instruction counts are of exactly the bench's workload.
 
 /// Readings in the data set.
 pub const BEAMS: usize = 4_500;

@@ -1,5 +1,5 @@
-//! The race's data, shared by `benches/race.rs` and `tests/race_smoothness.rs` (included with
-//! `#[path]`): the Intel lab map's distance-field blob as the demo firmware links it
+//! The race's data, shared by `benches/race.rs`, `tests/race_smoothness.rs` and the race's
+//! examples and tests: the Intel lab map's distance-field blob as the demo firmware links it
 //! (`firmware/assets/intel.bin`, built from the log by `cargo xtask demo-assets`: 5 cm cells,
 //! map_server thresholds, d_max 2 m), real scans of the log with their logged laser poses, and
 //! both models' parameters as fitted to this log.
@@ -35,7 +35,7 @@ pub struct RaceData {
 /// Reads the blob and the log.
 pub fn load() -> RaceData {
     let blob_path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware/assets/intel.bin");
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../firmware/assets/intel.bin");
     let blob = std::fs::read(&blob_path).unwrap_or_else(|e| panic!("{}: {e}", blob_path.display()));
     let log_path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
     let log = CarmenLog::read_path(&log_path, ReadOptions::default()).unwrap();

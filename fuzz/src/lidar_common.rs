@@ -1,6 +1,6 @@
-// Shared by the LiDAR fuzz targets (included with `#[path]`): turns fuzz bytes into a stream
-// of valid frames (checksums recomputed, so mutations reach the frame contents and the
-// assembler) interleaved with raw bytes, then checks what every decoder must guarantee.
+//! Shared by the LiDAR fuzz targets: turns fuzz bytes into a stream
+//! of valid frames (checksums recomputed, so mutations reach the frame contents and the
+//! assembler) interleaved with raw bytes, then checks what every decoder must guarantee.
 
 use beamfield::lidar::{AssemblerConfig, DecoderStats, LidarPoint, ScanAssembler, StreamDecoder};
 use beamfield::{BeamLayout, SensorMount};

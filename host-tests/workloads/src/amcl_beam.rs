@@ -1,5 +1,5 @@
-//! An AMCL-style beam model, as a same-run baseline for the race (`benches/race.rs`) and checked
-//! against the crate's ray caster (`tests/race_smoothness.rs`): written here from the algorithm
+//! An AMCL-style beam model, as a same-run baseline for the race (`host-tests/benches/race.rs`) and checked
+//! against the crate's ray caster (`host-tests/tests/race_smoothness.rs`): written here from the algorithm
 //! AMCL documents, not from its source.
 //!
 //! What it does per beam, as AMCL's `BeamModel` does: cast with Bresenham's line algorithm from

@@ -1,0 +1,3 @@
+//! What the fuzz targets share (the LiDAR decoders' targets: [`lidar_common`]).
+
+pub mod lidar_common;

@@ -1,0 +1,264 @@
+//! QEMU: the boards, running a firmware image with its output in files (optionally under the
+//! counting plugin or with USART1 on a socket), the errors of a failed run, and
+//! `cargo xtask qemu`.
+
+use crate::cross::build_firmware;
+use crate::error::{Error, Result};
+use crate::process::{repo_root, run_to_files, scratch, show, spawn_error, Finished};
+use std::fs::{self, File};
+use std::io::Write;
+use std::os::unix::net::UnixStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Seconds before a QEMU run is killed (a hung program then fails with status 124).
+pub const QEMU_TIMEOUT_S: u64 = 120;
+
+/// A board the programs run on: QEMU machine, memory layout, SysTick clock.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum Board {
+    /// ARM MPS2+ AN386: Cortex-M4F, 4 MiB code, 4 MiB SRAM, 25 MHz (the repository's memory.x).
+    #[value(name = "mps2-an386")]
+    Mps2An386,
+    /// STM32F405 (Netduino Plus 2): 1 MiB flash, 128 KiB of its SRAM used (memory-stm32f405.x).
+    #[value(name = "netduinoplus2")]
+    Netduinoplus2,
+}
+
+impl Board {
+    /// QEMU's name of the machine.
+    pub fn machine(self) -> &'static str {
+        match self {
+            Board::Mps2An386 => "mps2-an386",
+            Board::Netduinoplus2 => "netduinoplus2",
+        }
+    }
+
+    /// The memory layout the firmware is linked with for this board.
+    pub fn memory_x(self) -> PathBuf {
+        repo_root().join(match self {
+            Board::Mps2An386 => "memory.x",
+            Board::Netduinoplus2 => "memory-stm32f405.x",
+        })
+    }
+
+    /// SysTick's clock in QEMU's model of the board, Hz.
+    pub fn core_hz(self) -> u64 {
+        match self {
+            Board::Mps2An386 => 25_000_000,
+            Board::Netduinoplus2 => 168_000_000,
+        }
+    }
+}
+
+/// Fails unless `qemu-system-arm` runs, saying how to install it.
+pub fn ensure_qemu() -> Result {
+    if crate::process::answers(Path::new("qemu-system-arm")) {
+        Ok(())
+    } else {
+        Err(Error::Missing(
+            "qemu-system-arm not found. Install it:\n  \
+             Debian/Ubuntu: sudo apt-get install -y --no-install-recommends qemu-system-arm\n  \
+             Fedora: sudo dnf install qemu-system-arm    macOS: brew install qemu"
+                .to_string(),
+        ))
+    }
+}
+
+/// `timeout 120 qemu-system-arm -machine MACHINE` with semihosting and `-icount shift=0`
+/// (one instruction is one nanosecond of virtual time), without the kernel.
+fn qemu_command(machine: &str) -> Command {
+    let mut cmd = Command::new("timeout");
+    cmd.args([
+        &QEMU_TIMEOUT_S.to_string(),
+        "qemu-system-arm",
+        "-machine",
+        machine,
+    ])
+    .args([
+        "-nographic",
+        "-semihosting-config",
+        "enable=on,target=native",
+    ])
+    .args(["-icount", "shift=0"]);
+    cmd
+}
+
+/// Runs `elf` on QEMU's `machine`, with `extra` QEMU arguments (the counting plugin's), its
+/// output in files named after `name`.
+pub fn run_elf(elf: &Path, machine: &str, extra: &[String], name: &str) -> Result<Finished> {
+    let mut cmd = qemu_command(machine);
+    cmd.args(extra).arg("-kernel").arg(elf);
+    run_to_files(&mut cmd, name)
+}
+
+/// The error for a firmware program (`what`, e.g. "the demo") that exited `code` (not 0) under
+/// QEMU on `machine`: 124 is `timeout` killing it after [`QEMU_TIMEOUT_S`] seconds, 134 a CPU
+/// lockup (QEMU aborts), any other code the program's own failure, explained by `cause`.
+pub fn failure(code: i32, what: &str, machine: &str, cause: &str) -> Error {
+    Error::Qemu(match code {
+        124 => format!("{what} did not finish within {QEMU_TIMEOUT_S} s (hung?)"),
+        134 => format!(
+            "QEMU stopped with a CPU lockup on `{machine}`: does the memory layout fit the board?"
+        ),
+        c => format!("{what} exited {c} under QEMU ({machine}): {cause}"),
+    })
+}
+
+/// `cargo xtask qemu`: builds the firmware's programs and runs `bin` on `machine`, printing its
+/// output; fails unless it exits 0.
+pub fn qemu(bin: &str, machine: &str, release: bool) -> Result {
+    ensure_qemu()?;
+    let elves = build_firmware(release, None)?;
+    let elf = elves.get(bin).ok_or_else(|| {
+        Error::Host(format!(
+            "no firmware program `{bin}`; there are: {}",
+            elves.keys().cloned().collect::<Vec<_>>().join(", ")
+        ))
+    })?;
+    let run = run_elf(elf, machine, &[], bin)?;
+    print!("{}", run.stdout);
+    eprint!("{}", run.stderr);
+    match run.code {
+        0 => {
+            eprintln!("xtask: `{bin}` exited 0 under QEMU ({machine})");
+            Ok(())
+        }
+        c => Err(failure(c, &format!("`{bin}`"), machine, "see its output")),
+    }
+}
+
+/// A run with USART1 on a socket: what it printed and how long it took.
+pub struct UartRun {
+    /// Exit code, stdout, stderr.
+    pub finished: Finished,
+    /// From QEMU's start to its end.
+    pub elapsed: Duration,
+}
+
+/// Kills the QEMU child when dropped early (an error on the way), so none is left running.
+struct Guard(Option<Child>);
+
+impl Drop for Guard {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.0.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+/// Seconds to wait for the firmware's ready line.
+const READY_TIMEOUT_S: u64 = 60;
+
+/// Starts `elf` on the `netduinoplus2` with USART1 on a listening Unix socket, waits for a line
+/// starting with `ready` in the semihosting output (a file, never a pipe), connects, sends
+/// `header` and `stream`, and waits for QEMU to exit. `extra` is appended to QEMU's arguments
+/// (the counting plugin).
+pub fn run_with_uart(
+    elf: &Path,
+    ready: &str,
+    header: &[u8],
+    stream: &[u8],
+    extra: &[String],
+) -> Result<UartRun> {
+    let dir = scratch()?;
+    let sock = dir.join("usart1.sock");
+    let (out_p, err_p) = (dir.join("uart.stdout"), dir.join("uart.stderr"));
+    let file = |p: &Path| File::create(p).map_err(|e| Error::io(p, e));
+    let mut cmd = qemu_command("netduinoplus2");
+    cmd.args(["-monitor", "none"])
+        .arg("-chardev")
+        .arg(format!(
+            "socket,id=usart1,path={},server=on,wait=off",
+            sock.display()
+        ))
+        .args(["-serial", "chardev:usart1"])
+        .args(extra)
+        .arg("-kernel")
+        .arg(elf)
+        .stdin(Stdio::null())
+        .stdout(file(&out_p)?)
+        .stderr(file(&err_p)?);
+    eprintln!(
+        "+ {} >{} 2>{}",
+        show(&cmd),
+        out_p.display(),
+        err_p.display()
+    );
+    let started = Instant::now();
+    let child = cmd.spawn().map_err(|e| spawn_error(&cmd, e))?;
+    let mut guard = Guard(Some(child));
+    let read = |p: &Path| fs::read_to_string(p).unwrap_or_default();
+
+    // The ready line, or QEMU's end, or the deadline.
+    loop {
+        if read(&out_p).lines().any(|l| l.starts_with(ready)) {
+            break;
+        }
+        let exited = guard
+            .0
+            .as_mut()
+            .and_then(|c| c.try_wait().ok().flatten())
+            .is_some();
+        if exited || started.elapsed() > Duration::from_secs(READY_TIMEOUT_S) {
+            let why = if exited { "QEMU exited" } else { "timed out" };
+            return Err(Error::Qemu(format!(
+                "{why} before the firmware's ready line:\n{}{}",
+                read(&out_p),
+                read(&err_p)
+            )));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    eprintln!(
+        "xtask: firmware ready after {:.1} s; sending {} bytes into USART1",
+        started.elapsed().as_secs_f64(),
+        stream.len()
+    );
+    let mut conn = UnixStream::connect(&sock).map_err(|e| Error::io(&sock, e))?;
+    // QEMU takes a byte only when the firmware has read the previous one: a write blocks until
+    // the firmware catches up, and fails if QEMU goes away.
+    conn.set_write_timeout(Some(Duration::from_secs(QEMU_TIMEOUT_S)))
+        .map_err(|e| Error::io(&sock, e))?;
+    let mut sent_at = Instant::now();
+    let send = (|| -> std::io::Result<()> {
+        conn.write_all(header)?;
+        for (i, piece) in stream.chunks(8192).enumerate() {
+            conn.write_all(piece)?;
+            if sent_at.elapsed() > Duration::from_secs(5) {
+                eprintln!("xtask: sent {} of {} bytes", (i + 1) * 8192, stream.len());
+                sent_at = Instant::now();
+            }
+        }
+        conn.flush()
+    })();
+    // Keep the connection open until QEMU ends: the bytes still in the socket are read then.
+    let status = guard
+        .0
+        .take()
+        .map(|mut c| c.wait())
+        .transpose()
+        .map_err(|e| Error::Spawn {
+            command: "waiting for QEMU".into(),
+            source: e,
+        })?;
+    let elapsed = started.elapsed();
+    drop(conn);
+    let (stdout, stderr) = (read(&out_p), read(&err_p));
+    let _ = fs::remove_dir_all(&dir);
+    if let Err(e) = send {
+        return Err(Error::Qemu(format!(
+            "sending the stream failed ({e}); the firmware printed:\n{stdout}{stderr}"
+        )));
+    }
+    Ok(UartRun {
+        finished: Finished {
+            code: status.and_then(|s| s.code()).unwrap_or(137),
+            stdout,
+            stderr,
+        },
+        elapsed,
+    })
+}
