@@ -19,7 +19,6 @@
 
 pub mod config;
 pub mod estimate;
-mod fast;
 pub mod filter;
 pub mod motion;
 pub mod normal;

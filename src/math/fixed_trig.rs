@@ -1,6 +1,11 @@
-//! Integer sine and cosine for the per-pose rotation (no float per pose).
+//! Integer sine and cosine for the fixed-point scorer's per-pose rotation (no float per pose),
+//! behind the `fixed` feature.
+//!
+//! Contract: integer operations only (no f32, no f64, no tables), any input angle, no panics
+//! (every narrowing saturates). Depends only on the `fixed` crate's `I16F16` (the same type as
+//! `fixed_point::I16F16`), nothing of this crate above `math`.
 
-use super::I16F16;
+use fixed::types::I16F16;
 
 /// `1.0` in Q2.30.
 pub(crate) const ONE_Q30: i64 = 1 << 30;

@@ -1,18 +1,42 @@
-//! The math façade: the only module in the crate that calls a transcendental function.
+//! The math module: every elementary function of the crate, and the only place that calls a
+//! transcendental function.
 //!
-//! Every other module goes through these functions, so the numerical backend is chosen in one
-//! place. The default backend is [`libm`] (a port of musl's libm), except `sin_cos`, which is the
-//! crate's own single-precision reduction and Taylor series (private module `trig`): `libm::sincosf`
-//! linked 6.8 KB of code, used about 0.9 KB of stack and cost about 1,500 instructions per call on
-//! a Cortex-M4F (its exact reduction runs in soft-float f64), for 0.5 ulp better accuracy than
-//! anything scoring needs. The `micromath` feature swaps in the `micromath` crate's
-//! approximations for `sin_cos` and `atan2` only (about 20 instructions, 1e-3 accurate), while
-//! micromath's `exp`, `ln` and `sqrt` are no faster than libm's and far
-//! less accurate (measured below), so those always come from libm, as do `erf`, `erfc` and
-//! `expm1`. Trig is only ever called once per pose or per layout, never per beam.
+//! Contract: `no_std`, no allocation, no panics, no tables beyond constants; nothing here
+//! imports from the rest of the crate (every model, the localizer and the fixed-point scorer
+//! sit above it), so the numerical backend is chosen in one place. Each function states its
+//! accuracy; the table below collects them all.
 //!
-//! Maximum errors against f64, measured by `host-tests/tests/math_backend.rs` on every test run
-//! (which also asserts them; run it with `--features micromath` for the second column):
+//! - The façade (this file): [`exp`], [`ln`], [`sqrt`], [`sin_cos`], [`atan2`], [`erf`],
+//!   [`erfc`], [`expm1`], [`floor`], [`normal_cdf`], [`normal_mass_straddling_zero`] and their
+//!   `*_f64` twins. The default backend is [`libm`] (a port of musl's libm), except `sin_cos`,
+//!   which is the crate's own single-precision reduction and Taylor series (private module
+//!   `trig`): `libm::sincosf` linked 6.8 KB of code, used about 0.9 KB of stack and cost about
+//!   1,500 instructions per call on a Cortex-M4F (its exact reduction runs in soft-float f64),
+//!   for 0.5 ulp better accuracy than anything scoring needs. The `micromath` feature swaps in
+//!   the `micromath` crate's approximations for `sin_cos` and `atan2` only (about 20
+//!   instructions, 1e-3 accurate), while micromath's `exp`, `ln` and `sqrt` are no faster than
+//!   libm's and far less accurate (measured below), so those always come from libm, as do
+//!   `erf`, `erfc` and `expm1`. Trig is only ever called once per pose or per layout, never per
+//!   beam. The f64 helpers always use libm: they serve the EM and host-side code that
+//!   accumulates in double precision.
+//! - [`wrap_angle`], [`wrap_angle_f64`] (private module `angle`): headings into `[−π, π)`.
+//! - [`log_add_exp`], [`log_sum_exp4`] (private module `log_sum_exp`): sums of probabilities
+//!   kept as logarithms, for the likelihood field's term, the beam mixture and the localizer's
+//!   recovery averages.
+//! - The localizer's per-particle functions (crate-private module `fast`): `exp_nonpositive`,
+//!   `sin_cos_near` and `wrap_once`, specialized to the filter's ranges, each falling back to
+//!   the façade outside them.
+//! - `sin_cos_q30` (feature `fixed`, private module `fixed_trig`): integer sine and cosine in
+//!   Q2.30 for the fixed-point scorer, re-exported as `fixed_point::sin_cos_q30`.
+//!
+//! # Accuracy
+//!
+//! Maximum errors against f64 (std's functions or, for `erf`/`erfc` and the normal masses, the
+//! independent f64 series of `host_tests::reference`), measured on every test run by the test
+//! named in the last column, which also asserts them (each bound is the measured maximum
+//! rounded up in its second digit). `math_backend` is `host-tests/tests/math_backend.rs`; run it
+//! with `--features micromath` for the micromath column. The other tests are this module's unit
+//! tests (`cargo test -p beamfield --lib math::`).
 //!
 //! | function | libm (default) | micromath feature |
 //! |---|---|---|
@@ -26,9 +50,22 @@
 //!
 //! For the record, micromath's own `exp`, `ln` and `sqrt` measured 2.4e-3 relative, 0.12
 //! absolute and 6.1e-2 relative on the same ranges: not usable for a likelihood.
-//!
-//! The f64 helpers (`*_f64`) always use libm: they serve the EM and host-side code that
-//! accumulates in double precision.
+
+mod angle;
+pub(crate) mod fast;
+#[cfg(feature = "fixed")]
+mod fixed_trig;
+mod log_sum_exp;
+// With `micromath`, its sin/cos are used instead and this module only runs its tests.
+#[cfg_attr(feature = "micromath", allow(dead_code))]
+mod trig;
+
+pub use angle::{wrap_angle, wrap_angle_f64};
+#[cfg(feature = "fixed")]
+pub(crate) use fixed_trig::sat_i32;
+#[cfg(feature = "fixed")]
+pub use fixed_trig::sin_cos_q30;
+pub use log_sum_exp::{log_add_exp, log_sum_exp4};
 
 /// `e^x`.
 #[inline]
@@ -57,7 +94,7 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     }
     #[cfg(not(feature = "micromath"))]
     {
-        crate::trig::sin_cos(x)
+        trig::sin_cos(x)
     }
 }
 
