@@ -195,8 +195,6 @@ pub mod raycast;
 pub mod scan;
 pub mod sonar;
 pub mod tempered;
-#[cfg(test)]
-mod test_rng;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use beam_field::BeamFieldModel;
