@@ -398,9 +398,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// `wᵢ ← wᵢ·p(z | xᵢ)` in log space, and the estimate, in two passes. Pass 1: the
     /// log-weights `ln wᵢ + ln p(z | xᵢ)` (the first term skipped while the weights are uniform,
     /// and added to the total instead) and their maximum, whose particle is the estimate's
-    /// centre. Pass 2: the weights `eᵢ = e^{vᵢ − max}` ([`exp_nonpositive`], within 2e-7 of
-    /// `e^x`), their sum `S` (plain f32: `S ≥ 1`, so its relative rounding error is below
-    /// `n·2⁻²⁴`, 0.03 % at 5,000 particles, and it scales all weights alike, the resampling
+    /// centre. Pass 2: the weights `eᵢ = e^{vᵢ − max}` ([`exp_nonpositive`], within 2.6e-7
+    /// relative of `e^x`), their sum `S` (plain f32: `S ≥ 1`, so its relative rounding error is
+    /// below `n·2⁻²⁴`, 0.03 % at 5,000 particles, and it scales all weights alike, the resampling
     /// included, which uses `S` itself), `Σ eᵢ²`, and the estimate's
     /// sums over the centre's neighbourhood ([`Estimate::around`], which renormalizes, so the
     /// weights need not be). The weights are left unnormalized (`eᵢ`, summing to `S`): the

@@ -25,7 +25,7 @@
 //! One `u32` word `b` per attempt: layer `i = b & 127`, sign bit 7, and the 24-bit integer
 //! `m = b >> 8`, so `u = m·2⁻²⁴` and `x = m · ZIGGURAT_W[i]` with `ZIGGURAT_W[i] = xᵢ·2⁻²⁴`
 //! (rounded to f32). The fast test `x < xᵢ₊₁` is done in integers, exactly: `m < ZIGGURAT_K[i]
-//! = ⌈2²⁴·xᵢ₊₁/xᵢ⌉`. The wedge test uses the filter's own `e^x` for `x ≤ 0` (within 3e-7
+//! = ⌈2²⁴·xᵢ₊₁/xᵢ⌉`. The wedge test uses the filter's own `e^x` for `x ≤ 0` (within 2.6e-7
 //! relative, `src/math/fast.rs`), the tail [`crate::math`]'s `ln`; they take one more word
 //! each (two for a tail try). The tables were computed in f64 from the definition
 //! above (`r` by bisection on "the top layer ends at the peak") and rounded once;
