@@ -234,7 +234,7 @@ impl BeamModel {
         } else {
             self.ln_weights[3] + self.ln_inv_max_range
         };
-        log_sum_exp4([l_hit, l_short, l_max, l_rand])
+        math::log_sum_exp4([l_hit, l_short, l_max, l_rand])
     }
 
     /// Scores a scan given the ray-cast range of each beam (`z_star_m[k]` for reading `k`).
@@ -275,27 +275,6 @@ impl BeamModel {
         let paired = z_star_m.get(..n).unwrap_or(&[]);
         self.scan_log_likelihood(scan, paired)
     }
-}
-
-/// `ln Σ e^{l_i}` of four log-terms, any of which may be `−∞`. All `−∞` gives `−∞`.
-fn log_sum_exp4(l: [f32; 4]) -> f32 {
-    let m = l
-        .iter()
-        .fold(f32::NEG_INFINITY, |a, &b| if b > a { b } else { a });
-    if m == f32::NEG_INFINITY {
-        return m;
-    }
-    let s: f32 = l
-        .iter()
-        .map(|&x| {
-            if x == f32::NEG_INFINITY {
-                0.0
-            } else {
-                math::exp(x - m)
-            }
-        })
-        .sum();
-    m + math::ln(s)
 }
 
 pub(crate) fn saturating_u16(n: usize) -> u16 {

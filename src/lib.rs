@@ -195,11 +195,6 @@ pub mod raycast;
 pub mod scan;
 pub mod sonar;
 pub mod tempered;
-#[cfg(test)]
-mod test_rng;
-// With `micromath`, its sin/cos are used instead and this module only runs its tests.
-#[cfg_attr(feature = "micromath", allow(dead_code))]
-mod trig;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use beam_field::BeamFieldModel;

@@ -1,9 +1,7 @@
-//! Planar poses, angle wrapping, and the sensor's mounting offset on the robot.
+//! Planar poses, the sensor's mounting offset on the robot, and angle wrapping (from `math`).
 //!
 //! Conventions (those of ROS, AMCL and Thrun's book): x forward, y left, angles counter-clockwise
 //! from +x, in radians; poses in the map (world) frame, metres.
-
-use core::f32::consts::{PI, TAU};
 
 /// A robot pose `(x, y, θ)` in the map frame: metres, metres, radians (counter-clockwise).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -34,43 +32,9 @@ impl Pose {
     }
 }
 
-/// Wraps an angle into `[−π, π)`, radians. Non-finite input comes back unchanged (NaN stays NaN).
-///
-/// 179° and −179° wrap to values 2° apart: `wrap_angle(a − b)` is the signed shortest
-/// difference between two headings.
-pub fn wrap_angle(angle_rad: f32) -> f32 {
-    if !angle_rad.is_finite() {
-        return angle_rad;
-    }
-    if (-PI..PI).contains(&angle_rad) {
-        return angle_rad;
-    }
-    let mut a = angle_rad - TAU * crate::math::floor((angle_rad + PI) / TAU);
-    // Rounding can land exactly on +π (or a hair outside); fold it back.
-    if a >= PI {
-        a -= TAU;
-    }
-    if a < -PI {
-        a += TAU;
-    }
-    a
-}
-
-/// Wraps an angle into `[−π, π)`, radians, in f64.
-pub fn wrap_angle_f64(angle_rad: f64) -> f64 {
-    use core::f64::consts::{PI, TAU};
-    if !angle_rad.is_finite() || (-PI..PI).contains(&angle_rad) {
-        return angle_rad;
-    }
-    let mut a = angle_rad - TAU * libm::floor((angle_rad + PI) / TAU);
-    if a >= PI {
-        a -= TAU;
-    }
-    if a < -PI {
-        a += TAU;
-    }
-    a
-}
+/// Angle wrapping lives in the math module (`crate::math`), below every model; re-exported here,
+/// beside the poses whose headings it wraps.
+pub use crate::math::{wrap_angle, wrap_angle_f64};
 
 /// Where the range sensor sits on the robot: Thrun's `(x_k,sens, y_k,sens)` plus a yaw.
 ///
@@ -111,38 +75,6 @@ impl SensorMount {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn wrap_table() {
-        let deg = PI / 180.0;
-        let cases: [(f32, f32); 7] = [
-            (0.0, 0.0),
-            (PI, -PI),
-            (-PI, -PI),
-            (2.5 * PI, 0.5 * PI),
-            (179.0 * deg - (-179.0 * deg), -2.0 * deg),
-            (TAU + 0.5, 0.5),
-            (-TAU - 0.5, -0.5),
-        ];
-        for (input, want) in cases {
-            let got = wrap_angle(input);
-            assert!(
-                (got - want).abs() < 1e-5,
-                "wrap({input}) = {got}, want {want}"
-            );
-            assert!((-PI..PI).contains(&got));
-        }
-        assert!(wrap_angle(f32::NAN).is_nan());
-    }
-
-    #[test]
-    fn wrap_stays_in_range_for_large_inputs() {
-        for k in -1000..1000 {
-            let a = k as f32 * 0.731;
-            let w = wrap_angle(a);
-            assert!((-PI..PI).contains(&w), "{a} -> {w}");
-        }
-    }
 
     #[test]
     fn mount_offset_rotates_with_robot() {

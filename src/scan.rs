@@ -367,7 +367,7 @@ mod tests {
     /// be the f32 nearest to it or its neighbour (faithful), and the nearest in nearly every case.
     #[test]
     fn uniform_bearings_are_rounded_once() {
-        let mut rng = crate::test_rng::XorShift64(0x9E37_79B9_7F4A_7C15u64);
+        let mut rng = crate::mcl::XorShift64::new(0x9E37_79B9_7F4A_7C15u64);
         let mut next = || rng.uniform();
         let (mut total, mut not_nearest) = (0usize, 0usize);
         for _ in 0..300 {

@@ -13,7 +13,6 @@ pub mod reference_backend;
 pub mod sonar_sim;
 pub mod sonar_uci;
 pub mod splitmix;
-pub mod xorshift;
 
 use std::path::PathBuf;
 

@@ -1,4 +1,4 @@
-//! The math façade's documented error bounds (the table in `src/math.rs`, asserted by
+//! The math façade's documented error bounds (the table in `src/math/mod.rs`, asserted by
 //! `tests/math_backend.rs`) for the backend this build of the tests uses, so that a test's
 //! tolerance comes from the backend it runs against instead of assuming libm's accuracy.
 //!

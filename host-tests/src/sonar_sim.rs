@@ -11,6 +11,7 @@
 //! arrives first. The simulator counts, per co-fired pair, how often `j`'s echo was detected and
 //! arrived before `i`'s own: that rate is the simulator's *effective* pairwise `q`.
 
+use crate::splitmix::Draws;
 /// A small deterministic PRNG (SplitMix64), so the tests need no external randomness.
 pub use crate::splitmix::SplitMix64 as Rng;
 

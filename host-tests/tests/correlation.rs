@@ -11,7 +11,7 @@ use beamfield_tools::field_cmd::build_blob;
 use beamfield_tools::map::{Occupancy, OccupancyMap};
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 
-use host_tests::xorshift::XorShift64 as Rng;
+use beamfield::mcl::XorShift64 as Rng;
 
 /// ρ by its definition (docs/models.md#features), in f64, with m̄ the mean over both maps.
 fn rho_f64(m: &[f64], l: &[f64]) -> f64 {
@@ -44,7 +44,7 @@ fn rho_matches_f64_definition_on_small_grids() {
     const ORIGIN: (f64, f64) = (-1.0, 0.5);
     const LW: u32 = 9;
     const LH: u32 = 7;
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = Rng::new(0x9E37_79B9_7F4A_7C15);
     let mount = (0.1f64, -0.05f64, 0.2f64);
     let sm = SensorMount {
         x_m: mount.0 as f32,
@@ -54,10 +54,16 @@ fn rho_matches_f64_definition_on_small_grids() {
     let layout = BeamLayout::<24>::uniform(-1.5, 0.13, 24, 1.5, sm).unwrap();
     let (mut checked, mut skipped, mut positive) = (0, 0, 0);
     for _trial in 0..400 {
-        let occ: Vec<bool> = (0..W * H).map(|_| rng.next() < 0.3).collect();
+        let occ: Vec<bool> = (0..W * H).map(|_| rng.uniform() < 0.3).collect();
         let codes: Vec<u8> = occ
             .iter()
-            .map(|&o| if o { 0 } else { 1 + (rng.next() * 200.0) as u8 })
+            .map(|&o| {
+                if o {
+                    0
+                } else {
+                    1 + (rng.uniform() * 200.0) as u8
+                }
+            })
             .collect();
         let h = FieldHeader::new(
             W as u32,
@@ -73,15 +79,15 @@ fn rho_matches_f64_definition_on_small_grids() {
         let model = MapCorrelation::new(view, LW, LH, &mut buf).unwrap();
         // Poses rounded to f32 first, so both sides start from the same numbers.
         let pose = Pose::new(
-            (ORIGIN.0 + rng.next() * W as f64 * RES) as f32,
-            (ORIGIN.1 + rng.next() * H as f64 * RES) as f32,
-            ((rng.next() - 0.5) * 7.0) as f32,
+            (ORIGIN.0 + rng.uniform() * W as f64 * RES) as f32,
+            (ORIGIN.1 + rng.uniform() * H as f64 * RES) as f32,
+            ((rng.uniform() - 0.5) * 7.0) as f32,
         );
         let ranges: Vec<f32> = (0..24)
-            .map(|_| match rng.next() {
+            .map(|_| match rng.uniform() {
                 u if u < 0.08 => f32::NAN,
                 u if u < 0.16 => 1.5,
-                _ => (0.05 + rng.next() * 1.4) as f32,
+                _ => (0.05 + rng.uniform() * 1.4) as f32,
             })
             .collect();
         let scan = Scan::<24>::from_ranges(&ranges).unwrap();

@@ -22,7 +22,7 @@
 use beamfield::em::{fit_slices, EmConfig, ShapeUpdate};
 use beamfield::BeamIntrinsics;
 use host_tests::reference::{self, phi, Intrinsics};
-use host_tests::splitmix::SplitMix64 as Rng;
+use host_tests::splitmix::{Draws, SplitMix64 as Rng};
 use std::f64::consts::PI;
 
 const ZMAX: f64 = 8.0;
@@ -52,7 +52,7 @@ fn room_cast(x: f64, y: f64, theta: f64) -> f64 {
 /// circle, `z*` the exact distance to the walls capped at z_max, readings drawn from the mixture
 /// (weights 0.6 / 0.28 / 0.04 / 0.08, σ 0.05 m, λ 0.6/m).
 fn room_data() -> (Vec<f32>, Vec<f32>) {
-    let mut rng = Rng(0x0F32_0040);
+    let mut rng = Rng::new(0x0F32_0040);
     let (mut z, mut zs) = (Vec::new(), Vec::new());
     for _ in 0..30 {
         let (x, y, h) = (rng.range(0.5, 9.5), rng.range(0.5, 5.5), rng.range(-PI, PI));

@@ -13,7 +13,7 @@
 use beamfield::em::{fit_slices, EmConfig, ShapeUpdate};
 use beamfield::BeamIntrinsics;
 use host_tests::reference::{self, Intrinsics};
-use host_tests::splitmix::SplitMix64 as Rng;
+use host_tests::splitmix::{Draws, SplitMix64 as Rng};
 use proptest::prelude::*;
 
 fn to_ref(i: &BeamIntrinsics) -> Intrinsics {
@@ -33,7 +33,7 @@ fn to_ref(i: &BeamIntrinsics) -> Intrinsics {
 /// mixture (hits by rejection from the truncated normal, shorts by inverse CDF), and a random
 /// start.
 fn data_set(seed: u64, n: usize) -> (Vec<f32>, Vec<f32>, BeamIntrinsics) {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let zmax = rng.range(2.0, 30.0);
     let mut w = [0.0; 4];
     for x in &mut w {

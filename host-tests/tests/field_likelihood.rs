@@ -23,7 +23,7 @@ fn turtlebot3() -> (Vec<u8>, Grid) {
     (blob, g)
 }
 
-use host_tests::xorshift::XorShift64 as Rng;
+use beamfield::mcl::XorShift64 as Rng;
 
 /// f64 endpoint of beam k (grid units), as docs/models.md#field writes it.
 fn endpoint(
@@ -103,7 +103,7 @@ fn score_matches_f64_reference() {
         mount,
     )
     .unwrap();
-    let mut rng = Rng(0x1234_5678_9ABC_DEF1);
+    let mut rng = Rng::new(0x1234_5678_9ABC_DEF1);
     let mut worst_rel = 0.0f64;
     let mut off_map = 0usize;
     for trial in 0..40 {
@@ -111,9 +111,9 @@ fn score_matches_f64_reference() {
         // endpoints off the map are exercised too.
         let span = if trial % 2 == 0 { 5.0 } else { 22.0 };
         let pose = Pose::new(
-            (rng.next() * span - span / 2.0) as f32,
-            (rng.next() * span - span / 2.0) as f32,
-            (rng.next() * 7.0 - 3.5) as f32,
+            (rng.uniform() * span - span / 2.0) as f32,
+            (rng.uniform() * span - span / 2.0) as f32,
+            (rng.uniform() * 7.0 - 3.5) as f32,
         );
         let pose64 = (
             f64::from(pose.x_m),
@@ -127,7 +127,7 @@ fn score_matches_f64_reference() {
         );
         let mut ranges = Vec::with_capacity(N);
         for k in 0..N {
-            let u = rng.next();
+            let u = rng.uniform();
             let r = if u < 0.03 {
                 f32::NAN
             } else if u < 0.05 {
@@ -138,7 +138,7 @@ fn score_matches_f64_reference() {
                 f32::INFINITY
             } else {
                 loop {
-                    let r = (rng.next() * f64::from(z_max)) as f32;
+                    let r = (rng.uniform() * f64::from(z_max)) as f32;
                     let b = f64::from(layout.beams()[k].bearing_rad);
                     let trig_cells = trig_error_m(mount64, f64::from(r)) / grid.res;
                     if !near_edge(

@@ -33,7 +33,7 @@ use beamfield_tools::map::load_map;
 
 const N: usize = 180;
 
-use host_tests::xorshift::XorShift64 as Rng;
+use beamfield::mcl::XorShift64 as Rng;
 
 /// The likelihood field with AMCL's default parameters over `blob`.
 fn amcl_field(blob: &[u8], z_max: f32) -> LikelihoodField<'_> {
@@ -202,7 +202,7 @@ fn prepared_matches_score_on_real_maps_and_scans() {
         yaw_rad: 0.03,
     };
     let layout: BeamLayout<N> = log.layout_with_mount(mount).unwrap();
-    let mut rng = Rng(0x05EE_D0FF_1E1D);
+    let mut rng = Rng::new(0x05EE_D0FF_1E1D);
     for (name, rel, half_span) in [
         ("turtlebot3", "map_turtlebot3_world/map.yaml", 3.0),
         ("willow", "map_willow_garage/willow-full-0.05.yaml", 30.0),
@@ -224,9 +224,9 @@ fn prepared_matches_score_on_real_maps_and_scans() {
             assert_eq!(prep.frac_bits(), 16, "{name}");
             for _ in 0..50 {
                 let pose = Pose::new(
-                    cx + ((rng.next() * 2.0 - 1.0) * half_span) as f32,
-                    cy + ((rng.next() * 2.0 - 1.0) * half_span) as f32,
-                    ((rng.next() - 0.5) * std::f64::consts::TAU) as f32,
+                    cx + ((rng.uniform() * 2.0 - 1.0) * half_span) as f32,
+                    cy + ((rng.uniform() * 2.0 - 1.0) * half_span) as f32,
+                    ((rng.uniform() - 0.5) * std::f64::consts::TAU) as f32,
                 );
                 compare(&lf, &prep, &layout, &scan, &pose, Stride::ONE, &mut t);
             }
@@ -301,17 +301,17 @@ fn wide_map_uses_fewer_fraction_bits() {
     let lf = amcl_field(&blob, 10.0);
     let layout =
         BeamLayout::<N>::uniform(-1.5, 3.0 / N as f32, N, 10.0, SensorMount::CENTERED).unwrap();
-    let mut rng = Rng(77);
-    let ranges: Vec<f32> = (0..N).map(|_| (rng.next() * 9.0) as f32).collect();
+    let mut rng = Rng::new(77);
+    let ranges: Vec<f32> = (0..N).map(|_| (rng.uniform() * 9.0) as f32).collect();
     let scan = Scan::<N>::from_ranges(&ranges).unwrap();
     let prep = lf.prepare(&layout, &scan);
     assert_eq!(prep.frac_bits(), 15);
     let mut t = Tally::default();
     for _ in 0..400 {
         let pose = Pose::new(
-            ((rng.next() * 2.0 - 1.0) * 520.0) as f32,
-            ((rng.next() * 2.0 - 1.0) * 0.3) as f32,
-            ((rng.next() - 0.5) * std::f64::consts::TAU) as f32,
+            ((rng.uniform() * 2.0 - 1.0) * 520.0) as f32,
+            ((rng.uniform() * 2.0 - 1.0) * 0.3) as f32,
+            ((rng.uniform() - 0.5) * std::f64::consts::TAU) as f32,
         );
         compare(&lf, &prep, &layout, &scan, &pose, Stride::ONE, &mut t);
     }
@@ -442,7 +442,7 @@ fn tempered_prepare_matches_the_tempered_model() {
     let layout: BeamLayout<N> = log.layout().unwrap();
     let blob = blob_of("map_turtlebot3_world/map.yaml");
     let lf = amcl_field(&blob, z_max);
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     let (mut equal, mut poses) = (0usize, 0usize);
     for (kappa, stride) in [(1.0f32, 1usize), (8.25, 1), (4.0, 3)] {
         let tempered = Tempered::new(lf.clone(), kappa, stride).unwrap();
@@ -453,9 +453,9 @@ fn tempered_prepare_matches_the_tempered_model() {
             assert_eq!(ts.prepared().len(), plain.len());
             for _ in 0..30 {
                 let pose = Pose::new(
-                    ((rng.next() * 2.0 - 1.0) * 1.5) as f32,
-                    ((rng.next() * 2.0 - 1.0) * 1.5) as f32,
-                    ((rng.next() - 0.5) * std::f64::consts::TAU) as f32,
+                    ((rng.uniform() * 2.0 - 1.0) * 1.5) as f32,
+                    ((rng.uniform() * 2.0 - 1.0) * 1.5) as f32,
+                    ((rng.uniform() - 0.5) * std::f64::consts::TAU) as f32,
                 );
                 let t = ts.score(&pose);
                 let p = plain.score(&pose);

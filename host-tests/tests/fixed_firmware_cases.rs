@@ -161,7 +161,7 @@ impl<'a> Reference<'a> {
         let own = match path {
             // Each term rounded to I16F16 (≤ 2⁻¹⁷); the sum is exact in I48F16.
             Path::Fixed => n as f64 * 2f64.powi(-17),
-            // Each f32 table entry (ln to 3.8e-6 absolute, src/math.rs, and a few roundings:
+            // Each f32 table entry (ln to 3.8e-6 absolute, src/math/mod.rs, and a few roundings:
             // 1e-5) and the f32 sum (n roundings of at most Σ|term|·2⁻²⁴).
             Path::F32 => n as f64 * 1e-5 + n as f64 * abs_sum * 2f64.powi(-24),
         };

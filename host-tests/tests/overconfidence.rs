@@ -20,6 +20,7 @@ use beamfield_tools::calibrate::{calibrate, mass_above_truth, GridScores};
 use beamfield_tools::field_cmd::build_blob;
 use beamfield_tools::map::{Occupancy, OccupancyMap};
 use host_tests::corridor::{corridor, SplitMix, World};
+use host_tests::splitmix::Draws;
 
 const N: usize = 180;
 const RES_M: f64 = 0.01;
@@ -65,7 +66,7 @@ fn layout() -> BeamLayout<N> {
 /// The noisy scan from the true pose in the true world.
 fn true_scan() -> Scan<N> {
     let world = corridor();
-    let mut rng = SplitMix(5);
+    let mut rng = SplitMix::new(5);
     let ranges: Vec<f32> = (0..N)
         .map(|k| {
             let a = TRUTH.2 + k as f64 * std::f64::consts::TAU / N as f64;

@@ -18,18 +18,7 @@ use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::field_cmd::build_blob;
 use beamfield_tools::map::{load_map, OccupancyMap};
 use beamfield_tools::mapping::ray_cast_grid;
-
-/// A small deterministic generator (splitmix64), independent of the code under test.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use host_tests::splitmix::{Draws, SplitMix64};
 
 /// Casts `rays` random rays (start uniform over the map's rectangle, angle uniform, range
 /// limit 12 m) both ways; returns the signed errors (device − exact) in cells, in ray order.
@@ -38,16 +27,17 @@ fn errors_in_cells(map: &OccupancyMap, rays: usize, seed: u64, min_jump: f32) ->
     let caster = RayCaster::new(FieldView::parse(&blob).unwrap())
         .unwrap()
         .with_min_jump_cells(min_jump);
-    let mut rng = Rng(seed);
+    // The library's SplitMix64 (not the code under test here), drawn as f64.
+    let mut rng = SplitMix64::new(seed);
     let res = map.resolution_m;
     let (w, h) = (f64::from(map.width) * res, f64::from(map.height) * res);
     let max_range = 12.0;
     let mut errs = Vec::with_capacity(rays);
     for _ in 0..rays {
         // The start on the f32 lattice, so both casts start at the same point.
-        let x = (map.origin_x_m + rng.next() * w) as f32;
-        let y = (map.origin_y_m + rng.next() * h) as f32;
-        let a = ((rng.next() * 2.0 - 1.0) * std::f64::consts::PI) as f32;
+        let x = (map.origin_x_m + rng.uniform() * w) as f32;
+        let y = (map.origin_y_m + rng.uniform() * h) as f32;
+        let a = ((rng.uniform() * 2.0 - 1.0) * std::f64::consts::PI) as f32;
         let want = ray_cast_grid(map, f64::from(x), f64::from(y), f64::from(a), max_range);
         let got = caster.cast(x, y, a, max_range as f32);
         errs.push(f64::from(got - want) / res);

@@ -9,7 +9,7 @@ use host_workloads::intel_race;
 
 use beamfield::field::{emit_blob, FieldHeader, FieldView};
 use beamfield::{BeamFieldModel, Pose, RayCaster, SensorModel, Stride};
-use host_tests::splitmix::SplitMix64 as Rng;
+use host_tests::splitmix::{Draws, SplitMix64 as Rng};
 use intel_race::N;
 
 /// Casts `dirs` from `(x, y)` through the batch with 1, 2, 3, 4, 8 and 16 lanes and the default,
@@ -55,7 +55,7 @@ fn intel_every_beam_of_many_poses() {
     let data = intel_race::load();
     let view = FieldView::parse(&data.blob).unwrap();
     let max = data.max_range_m;
-    let mut rng = Rng(41);
+    let mut rng = Rng::new(41);
     let mut rays = 0;
     let mut hits = 0;
     for min_jump in [beamfield::raycast::JUMP_MIN_CELLS, 0.0, 8.0] {
@@ -112,7 +112,7 @@ fn random_blob(rng: &mut Rng, w: u32, h: u32, occupied: f64) -> Vec<u8> {
 
 #[test]
 fn random_blobs_random_rays() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let mut rays = 0;
     for trial in 0..60 {
         let (w, h) = (
@@ -176,7 +176,7 @@ fn random_blobs_random_rays() {
 
 #[test]
 fn batch_writes_what_fits_and_nothing_else() {
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     let blob = random_blob(&mut rng, 40, 30, 0.05);
     let rc = RayCaster::new(FieldView::parse(&blob).unwrap()).unwrap();
     let dirs: Vec<[f32; 2]> = (0..20)
@@ -209,7 +209,7 @@ fn intel_scores_equal_one_by_one() {
     let (beam, _) = intel_race::models(&data);
     let layout = &data.layout;
     let max = data.max_range_m;
-    let mut rng = Rng(99);
+    let mut rng = Rng::new(99);
     let mut scored = 0u64;
     for (_, scan, logged) in &data.scans {
         for j in 0..3 {
@@ -275,7 +275,7 @@ fn intel_scores_equal_one_by_one() {
 /// score is the one-ray-at-a-time one.
 #[test]
 fn random_blob_scores_equal_one_by_one() {
-    let mut rng = Rng(5);
+    let mut rng = Rng::new(5);
     let data = intel_race::load();
     let (beam, _) = intel_race::models(&data);
     let layout = &data.layout;

@@ -533,8 +533,8 @@ mod tests {
     /// definition `min over (x', y') of f(x', y') + (x − x')² + (y − y')²`.
     #[test]
     fn general_values_against_brute_force() {
-        let mut rng = crate::test_rng::XorShift64(0x2545_F491_4F6C_DD1Du64);
-        let mut next = || rng.next_u64();
+        let mut rng = crate::mcl::XorShift64::new(0x2545_F491_4F6C_DD1Du64);
+        let mut next = || rng.next_word();
         for _ in 0..300 {
             let w = (next() % 13) as usize + 1;
             let h = (next() % 13) as usize + 1;
@@ -580,8 +580,8 @@ mod tests {
     /// with a cell 14 columns from every seed must not.
     #[test]
     fn window_row_against_brute_force() {
-        let mut rng = crate::test_rng::XorShift64(0x9E37_79B9_7F4A_7C15u64);
-        let mut next = || rng.next_u64();
+        let mut rng = crate::mcl::XorShift64::new(0x9E37_79B9_7F4A_7C15u64);
+        let mut next = || rng.next_word();
         let mut settled = 0;
         for len in [
             1usize, 15, 16, 17, 255, 256, 257, 280, 511, 512, 513, 700, 1030,

@@ -211,16 +211,7 @@ impl LikelihoodParams {
         } else {
             f32::NEG_INFINITY
         };
-        let (hi, lo) = if l_hit >= l_rand {
-            (l_hit, l_rand)
-        } else {
-            (l_rand, l_hit)
-        };
-        if lo == f32::NEG_INFINITY {
-            hi
-        } else {
-            hi + math::ln(1.0 + math::exp(lo - hi))
-        }
+        math::log_add_exp(l_hit, l_rand)
     }
 }
 

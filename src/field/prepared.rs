@@ -589,8 +589,8 @@ mod tests {
     /// the grid point agree.
     #[test]
     fn subtracting_is_adding_the_negated_product() {
-        let mut rng = crate::test_rng::XorShift64(0x9e37_79b9_7f4a_7c15u64);
-        let mut next = || rng.next_u64();
+        let mut rng = crate::mcl::XorShift64::new(0x9e37_79b9_7f4a_7c15u64);
+        let mut next = || rng.next_word();
         let edges = [i32::MIN, i32::MIN + 1, -1, 0, 1, i32::MAX - 1, i32::MAX];
         let a_edges = [-(1 << 30), -(1 << 30) + 1, -1, 0, 1, (1 << 30) - 1, 1 << 30];
         for round in 0..200_000u32 {

@@ -33,13 +33,14 @@
 //!   quantization).
 
 mod scorer;
-mod trig;
 
+/// The integer sine and cosine live in the math module (`crate::math`, with the crate's other
+/// elementary functions); re-exported here beside the scorer that uses them.
+pub use crate::math::sin_cos_q30;
 pub use scorer::{
     FixedError, FixedField, FixedLayout, FixedPose, FixedScan, FixedScore, MAX_FIXED_BEAMS,
     MAX_RANGE_CELLS,
 };
-pub use trig::sin_cos_q30;
 
 /// Signed Q16.16: metres, radians, nats.
 pub type I16F16 = fixed::types::I16F16;

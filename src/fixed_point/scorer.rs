@@ -1,9 +1,9 @@
 //! [`FixedField`]: the likelihood field scored in integer arithmetic (see the module doc of
 //! [`crate::fixed_point`] for the Q formats).
 
-use super::trig::{sat_i32, sin_cos_q30};
 use super::{I16F16, I48F16};
 use crate::field::{FieldView, LikelihoodField, CODE_MAX, LIKELIHOOD_TABLE_LEN};
+use crate::math::{sat_i32, sin_cos_q30};
 use crate::pose::Pose;
 use crate::scan::{BeamLayout, Scan};
 

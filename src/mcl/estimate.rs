@@ -1,8 +1,8 @@
 //! The pose estimate of a weighted particle set: weighted mean, circular mean heading,
 //! covariance, and the effective sample size.
 
-use super::fast::wrap_once;
 use crate::math;
+use crate::math::fast::wrap_once;
 use crate::pose::{wrap_angle, Pose};
 
 /// What the filter believes after an update.

@@ -11,7 +11,8 @@
 //!   [`SensorModel`](crate::SensorModel) or a prepared tempered scan, resampling when the
 //!   effective sample size drops, augmented-MCL recovery (Table 8.3) from a
 //!   [`FreeSpace`](crate::field::FreeSpace) section, uniform and Gaussian initialization.
-//! - [`rng`]: [`SplitMix64`], a seeded generator the host and the device run identically.
+//! - [`rng`]: [`SplitMix64`] (the filter's) and [`XorShift64`] (the randomized checks'), seeded
+//!   generators the host and the device run identically.
 //!
 //! Memory: 18 bytes per particle of capacity (pose 12, weight 4, resampling count 2) in
 //! [`Particles`], plus a fixed ~80 bytes in [`Mcl`]. See `docs/localization.md` for the
@@ -19,7 +20,6 @@
 
 pub mod config;
 pub mod estimate;
-mod fast;
 pub mod filter;
 pub mod motion;
 pub mod normal;
@@ -30,4 +30,4 @@ pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LE
 pub use estimate::Estimate;
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
 pub use motion::{MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M};
-pub use rng::SplitMix64;
+pub use rng::{SplitMix64, XorShift64};

@@ -25,9 +25,9 @@
 //! `|δrot − π|` (both wrapped), so a robot reversing 1 m does not get the noise of a half turn
 //! (AMCL does the same). Units: metres and radians throughout.
 
-use super::fast::{sin_cos_near, wrap_once};
 use super::normal::standard_normal_from;
 use crate::math;
+use crate::math::fast::{sin_cos_near, wrap_once};
 use crate::pose::{wrap_angle, Pose};
 use core::f32::consts::PI;
 use rand_core::Rng;

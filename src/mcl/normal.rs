@@ -25,8 +25,8 @@
 //! One `u32` word `b` per attempt: layer `i = b & 127`, sign bit 7, and the 24-bit integer
 //! `m = b >> 8`, so `u = m·2⁻²⁴` and `x = m · ZIGGURAT_W[i]` with `ZIGGURAT_W[i] = xᵢ·2⁻²⁴`
 //! (rounded to f32). The fast test `x < xᵢ₊₁` is done in integers, exactly: `m < ZIGGURAT_K[i]
-//! = ⌈2²⁴·xᵢ₊₁/xᵢ⌉`. The wedge test uses the filter's own `e^x` for `x ≤ 0` (within 3e-7
-//! relative, `src/mcl/fast.rs`), the tail [`crate::math`]'s `ln`; they take one more word
+//! = ⌈2²⁴·xᵢ₊₁/xᵢ⌉`. The wedge test uses the filter's own `e^x` for `x ≤ 0` (within 2.6e-7
+//! relative, `src/math/fast.rs`), the tail [`crate::math`]'s `ln`; they take one more word
 //! each (two for a tail try). The tables were computed in f64 from the definition
 //! above (`r` by bisection on "the top layer ends at the peak") and rounded once;
 //! `host-tests/tests/mcl_ziggurat.rs` recomputes them and requires every entry to match bit for
@@ -37,9 +37,9 @@
 //! below 1e-30 with a sound generator; a broken one that returns a constant word could otherwise
 //! loop for ever) the last candidate is returned as it is.
 
-use super::fast::exp_nonpositive;
 use crate::gaussian::{uniform_f32, uniform_open_closed_f32};
 use crate::math;
+use crate::math::fast::exp_nonpositive;
 use rand_core::Rng;
 
 /// Number of layers of the ziggurat.

@@ -10,6 +10,7 @@ use beamfield_fixtures::{demo_plan, lidar_plan};
 use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
 use beamfield::Pose;
 use demo_plan::POSES;
+use host_tests::splitmix::Draws;
 use lidar_plan::segment::{MAX_RANGE_M, SCANS};
 use lidar_plan::BEAMS;
 

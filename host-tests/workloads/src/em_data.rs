@@ -5,12 +5,12 @@ pub const BEAMS: usize = 4_500;
 /// M-steps per fit in the bench.
 pub const ITERATIONS: u32 = 24;
 
-use host_tests::splitmix::SplitMix64 as Rng;
+use host_tests::splitmix::{Draws, SplitMix64 as Rng};
 
 /// 4,500 readings from a lidar-like mixture (z_max 30 m, z* in [0.5, 30], σ = 0.15 m,
 /// λ = 0.5/m, weights 0.75/0.1/0.05/0.1): `(z, z*)`, metres.
 pub fn data() -> (Vec<f32>, Vec<f32>) {
-    let mut rng = Rng(42);
+    let mut rng = Rng::new(42);
     let zmax = 30.0f64;
     let (mut z, mut zs) = (Vec::new(), Vec::new());
     for _ in 0..BEAMS {

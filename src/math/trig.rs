@@ -11,7 +11,9 @@
 //! Taylor series of `sin r` to `r⁹` and `cos r` to `r¹⁰` on `|r| ≤ π/4` (truncation below
 //! 1.8e-9), and the quadrant `k mod 4` picks signs and swaps.
 //!
-//! Accuracy (asserted by `host-tests/tests/math_backend.rs` against f64): see [`sin_cos`].
+//! Contract: f32 arithmetic only (no f64, no tables, no stack beyond registers), every input
+//! accepted, no panics. Accuracy (asserted against f64 by this file's test and by
+//! `host-tests/tests/math_backend.rs`): see [`sin_cos`].
 
 /// π/2, high part: 3217/2048, 12 significant bits.
 const FRAC_PI_2_HI: f32 = 3_217.0 / 2_048.0;
