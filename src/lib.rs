@@ -200,6 +200,7 @@ mod test_rng;
 // With `micromath`, its sin/cos are used instead and this module only runs its tests.
 #[cfg_attr(feature = "micromath", allow(dead_code))]
 mod trig;
+mod wire;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use beam_field::BeamFieldModel;

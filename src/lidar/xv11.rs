@@ -21,10 +21,13 @@
 //! `c = 0; for each w: c = 2·c + w` (in 32 bits); then `((c & 0x7FFF) + (c >> 15)) & 0x7FFF`.
 //!
 //! The decoder waits for `0xFA` followed by a valid index byte. After a failed checksum it looks
-//! for the next such pair inside the rejected bytes.
+//! for the next such pair inside the rejected bytes. Parse and emit place every field through
+//! the one table `field`; the decoder's packet check returns a verdict that the shared header
+//! hunt (`src/lidar/sync.rs`) settles (it counts, skips and resynchronises).
 
-use super::sync::HeaderHunt;
-use super::{bump, range_units, room, DecoderStats, EncodeError, LidarPoint};
+use super::sync::{Header, HeaderHunt, Verdict};
+use super::{range_units, room, DecoderStats, EncodeError, LidarPoint};
+use crate::wire;
 
 /// Start byte of a packet.
 pub const START: u8 = 0xFA;
@@ -39,10 +42,59 @@ pub const READINGS_PER_PACKET: usize = 4;
 /// Largest distance the 14-bit field carries, millimetres.
 pub const MAX_DISTANCE_MM: u16 = 0x3FFF;
 
+/// Where each field of a packet lies (offsets in bytes): the one table the parse and the emit
+/// side read.
+mod field {
+    use crate::wire::Field;
+
+    /// Start byte, [`START`](super::START).
+    pub const START: usize = 0;
+    /// Index byte, `0xA0 + packet`.
+    pub const INDEX: usize = 1;
+    /// Rotation speed, rpm × 64.
+    pub const SPEED: Field = 2..4;
+    /// The four readings, [`reading::LEN`] bytes each.
+    pub const READINGS: Field = 4..20;
+    /// The bytes the checksum covers (as ten 16-bit words).
+    pub const CHECKED: Field = 0..20;
+    /// Checksum of [`CHECKED`].
+    pub const CHECKSUM: Field = 20..22;
+
+    /// One reading, within [`READINGS`].
+    pub mod reading {
+        use crate::wire::Field;
+
+        /// Distance (the low 14 bits) and the flags (the top 2 bits), one `u16`.
+        pub const DISTANCE: Field = 0..2;
+        /// Signal strength.
+        pub const STRENGTH: Field = 2..4;
+        /// Bytes per reading.
+        pub const LEN: usize = 4;
+        /// The distance bits of [`DISTANCE`].
+        pub const DISTANCE_MASK: u16 = 0x3FFF;
+        /// "Invalid data": the distance bits are an error code.
+        pub const INVALID: u16 = 0x8000;
+        /// "Strength warning".
+        pub const STRENGTH_WARNING: u16 = 0x4000;
+    }
+}
+
+// The table covers the packet exactly.
+const _: () = {
+    assert!(field::START == 0 && field::INDEX == 1 && field::SPEED.start == 2);
+    assert!(field::SPEED.end == field::READINGS.start);
+    assert!(wire::len(&field::READINGS) == READINGS_PER_PACKET * field::reading::LEN);
+    assert!(
+        field::READINGS.end == field::CHECKSUM.start && field::CHECKED.end == field::CHECKSUM.start
+    );
+    assert!(field::CHECKSUM.end == PACKET_LEN);
+    assert!(field::reading::STRENGTH.end == field::reading::LEN);
+};
+
 /// The packet checksum of the first 20 bytes of `packet` (see the module docs).
 pub fn checksum(packet: &[u8]) -> u16 {
     let mut c: u32 = 0;
-    for w in packet.get(..20).unwrap_or(&[]).chunks_exact(2) {
+    for w in packet.get(field::CHECKED).unwrap_or(&[]).chunks_exact(2) {
         if let [lo, hi] = *w {
             c = (c << 1).wrapping_add(u32::from(u16::from_le_bytes([lo, hi])));
         }
@@ -52,6 +104,18 @@ pub fn checksum(packet: &[u8]) -> u16 {
 
 fn is_index(b: u8) -> bool {
     (FIRST_INDEX..FIRST_INDEX + PACKETS_PER_TURN as u8).contains(&b)
+}
+
+/// The packet header, `0xFA` and an index byte, for the shared header hunt.
+#[derive(Clone, Copy, Debug)]
+struct Xv11Header;
+
+impl Header for Xv11Header {
+    const FIRST: u8 = START;
+    #[inline(always)]
+    fn second(byte: u8) -> bool {
+        is_index(byte)
+    }
 }
 
 /// Why a packet was rejected by [`Xv11Packet::parse`].
@@ -91,6 +155,19 @@ impl core::fmt::Display for Xv11Error {
 }
 
 impl core::error::Error for Xv11Error {}
+
+impl Xv11Error {
+    /// What the rejection means for the stream (see [`Verdict`]).
+    #[inline(always)]
+    const fn verdict(self) -> Verdict {
+        match self {
+            Self::Truncated(_) | Self::BadStart | Self::BadChecksum { .. } => Verdict::BadChecksum,
+            // The hunt only buffers a packet after a valid index, so the decoder never meets
+            // this one.
+            Self::BadIndex(_) => Verdict::Impossible,
+        }
+    }
+}
 
 /// One reading, as transmitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -149,37 +226,37 @@ impl Xv11Packet {
     /// [`Xv11Error::Truncated`], [`Xv11Error::BadStart`], [`Xv11Error::BadChecksum`],
     /// [`Xv11Error::BadIndex`].
     pub fn parse(bytes: &[u8]) -> Result<Self, Xv11Error> {
-        let b = bytes
+        use field::reading;
+        let b: &[u8; PACKET_LEN] = bytes
             .get(..PACKET_LEN)
+            .and_then(|s| s.try_into().ok())
             .ok_or(Xv11Error::Truncated(bytes.len()))?;
-        let [start, index, s0, s1, body @ .., c0, c1] = b else {
-            return Err(Xv11Error::Truncated(bytes.len()));
-        };
-        if *start != START {
+        if b[field::START] != START {
             return Err(Xv11Error::BadStart);
         }
-        let carried = u16::from_le_bytes([*c0, *c1]);
+        let carried = wire::get_u16(b, field::CHECKSUM);
         let computed = checksum(b);
         if carried != computed {
             return Err(Xv11Error::BadChecksum { carried, computed });
         }
-        if !is_index(*index) {
-            return Err(Xv11Error::BadIndex(*index));
+        let index = b[field::INDEX];
+        if !is_index(index) {
+            return Err(Xv11Error::BadIndex(index));
         }
         let mut readings = [Xv11Reading::default(); READINGS_PER_PACKET];
-        for (r, c) in readings.iter_mut().zip(body.chunks_exact(4)) {
-            if let [d0, d1, s0, s1] = *c {
-                *r = Xv11Reading {
-                    distance_mm: u16::from_le_bytes([d0, d1 & 0x3F]),
-                    invalid: d1 & 0x80 != 0,
-                    strength_warning: d1 & 0x40 != 0,
-                    strength: u16::from_le_bytes([s0, s1]),
-                };
-            }
+        let body = b.get(field::READINGS).unwrap_or(&[]);
+        for (r, c) in readings.iter_mut().zip(body.chunks_exact(reading::LEN)) {
+            let d = wire::get_u16(c, reading::DISTANCE);
+            *r = Xv11Reading {
+                distance_mm: d & reading::DISTANCE_MASK,
+                invalid: d & reading::INVALID != 0,
+                strength_warning: d & reading::STRENGTH_WARNING != 0,
+                strength: wire::get_u16(c, reading::STRENGTH),
+            };
         }
         Ok(Self {
             packet: index - FIRST_INDEX,
-            speed_rpm_q6: u16::from_le_bytes([*s0, *s1]),
+            speed_rpm_q6: wire::get_u16(b, field::SPEED),
             readings,
         })
     }
@@ -191,23 +268,32 @@ impl Xv11Packet {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        use field::reading;
         let o = room(out, PACKET_LEN)?;
-        let [s0, s1] = self.speed_rpm_q6.to_le_bytes();
-        if let Some(head) = o.get_mut(..4) {
-            head.copy_from_slice(&[START, FIRST_INDEX.wrapping_add(self.packet), s0, s1]);
+        if let Some(start) = o.get_mut(field::START) {
+            *start = START;
         }
-        if let Some(body) = o.get_mut(4..20) {
-            for (c, r) in body.chunks_exact_mut(4).zip(self.readings.iter()) {
-                let [d0, d1] = (r.distance_mm & 0x3FFF).to_le_bytes();
-                let flags = (u8::from(r.invalid) << 7) | (u8::from(r.strength_warning) << 6);
-                let [t0, t1] = r.strength.to_le_bytes();
-                c.copy_from_slice(&[d0, d1 | flags, t0, t1]);
+        if let Some(index) = o.get_mut(field::INDEX) {
+            *index = FIRST_INDEX.wrapping_add(self.packet);
+        }
+        wire::put_u16(o, field::SPEED, self.speed_rpm_q6);
+        if let Some(body) = o.get_mut(field::READINGS) {
+            for (c, r) in body
+                .chunks_exact_mut(reading::LEN)
+                .zip(self.readings.iter())
+            {
+                let mut d = r.distance_mm & reading::DISTANCE_MASK;
+                if r.invalid {
+                    d |= reading::INVALID;
+                }
+                if r.strength_warning {
+                    d |= reading::STRENGTH_WARNING;
+                }
+                wire::put_u16(c, reading::DISTANCE, d);
+                wire::put_u16(c, reading::STRENGTH, r.strength);
             }
         }
-        let [c0, c1] = checksum(o).to_le_bytes();
-        if let Some(tail) = o.get_mut(20..) {
-            tail.copy_from_slice(&[c0, c1]);
-        }
+        wire::put_u16(o, field::CHECKSUM, checksum(o));
         Ok(PACKET_LEN)
     }
 
@@ -262,7 +348,7 @@ pub fn encode_revolution(
 /// Byte-at-a-time XV-11 stream decoder. See the module docs.
 #[derive(Clone, Debug)]
 pub struct Xv11Decoder {
-    hunt: HeaderHunt<PACKET_LEN>,
+    hunt: HeaderHunt<PACKET_LEN, Xv11Header>,
     last_speed_rpm_q6: Option<u16>,
 }
 
@@ -291,39 +377,34 @@ impl Xv11Decoder {
 
     /// Feeds one byte (see [`Xv11Decoder::feed`]).
     pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
-        if self.hunt.push(byte, START, is_index) {
-            self.complete(on_point);
-        }
-    }
-
-    fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
-        match Xv11Packet::parse(&self.hunt.buf) {
-            Ok(p) => {
-                self.hunt.accept();
-                let stats = &mut self.hunt.counter.stats;
-                bump(&mut stats.frames_ok);
-                self.last_speed_rpm_q6 = Some(p.speed_rpm_q6);
-                for j in 0..READINGS_PER_PACKET {
-                    on_point(p.point(j));
+        let speed = &mut self.last_speed_rpm_q6;
+        self.hunt.push_frame_byte(byte, &mut |packet| {
+            // The verdict on a whole packet held by the hunt (it opens with `0xFA` and an
+            // index byte); an accepted packet's readings go to `on_point`.
+            match Xv11Packet::parse(packet) {
+                Ok(p) => {
+                    *speed = Some(p.speed_rpm_q6);
+                    for j in 0..READINGS_PER_PACKET {
+                        on_point(p.point(j));
+                    }
+                    Verdict::Accept {
+                        points: READINGS_PER_PACKET as u32,
+                    }
                 }
-                stats.points = stats.points.saturating_add(READINGS_PER_PACKET as u32);
+                Err(e) => e.verdict(),
             }
-            Err(_) => {
-                bump(&mut self.hunt.counter.stats.bad_checksum);
-                self.hunt.rehunt(START, is_index);
-            }
-        }
+        });
     }
 
     /// The counters. `bytes == 22 · frames_ok + skipped_bytes +` [`Xv11Decoder::buffered`]
     /// always holds (an index is checked before the packet is buffered, so `bad_frames` stays 0).
     pub fn stats(&self) -> DecoderStats {
-        self.hunt.counter.stats
+        self.hunt.stats()
     }
 
     /// Bytes of a partial packet held.
     pub fn buffered(&self) -> usize {
-        self.hunt.len
+        self.hunt.len()
     }
 
     /// Rotation speed of the last good packet, rpm × 64.
