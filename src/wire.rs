@@ -32,6 +32,12 @@ pub(crate) fn get_u32(bytes: &[u8], field: Field) -> u32 {
     }
 }
 
+/// The little-endian IEEE 754 binary32 at `field` of `bytes` (0.0 when it does not fit).
+#[inline(always)]
+pub(crate) fn get_f32(bytes: &[u8], field: Field) -> f32 {
+    f32::from_bits(get_u32(bytes, field))
+}
+
 /// Writes `value` at `field` of `bytes` (nothing when the field does not fit or is not
 /// `value.len()` bytes long).
 #[inline(always)]
@@ -58,4 +64,10 @@ pub(crate) fn put_u32(bytes: &mut [u8], field: Field, value: u32) {
 /// The length of `field`, for the compile-time checks of a table.
 pub(crate) const fn len(field: &Field) -> usize {
     field.end - field.start
+}
+
+/// Writes `value` little-endian at `field` of `bytes` (see [`put`]).
+#[inline(always)]
+pub(crate) fn put_f32(bytes: &mut [u8], field: Field, value: f32) {
+    put(bytes, field, &value.to_le_bytes());
 }
