@@ -23,11 +23,18 @@
 //! The decoder waits for `0xFA` followed by a valid index byte. After a failed checksum it looks
 //! for the next such pair inside the rejected bytes. Parse and emit place every field through
 //! the one table `field`; the decoder's packet check returns a verdict that the shared header
-//! hunt (`src/lidar/sync.rs`) settles (it counts, skips and resynchronises).
+//! hunt (`src/lidar/sync.rs`) settles (it counts, skips and resynchronises); the decoder is in
+//! `decoder.rs`.
 
-use super::sync::{Header, HeaderHunt, Verdict};
-use super::{range_units, room, DecoderStats, EncodeError, LidarPoint};
+use super::sync::{Header, Verdict};
+use super::{range_units, room, EncodeError, LidarPoint};
 use crate::wire;
+
+mod decoder;
+#[cfg(test)]
+mod tests;
+
+pub use decoder::Xv11Decoder;
 
 /// Start byte of a packet.
 pub const START: u8 = 0xFA;
@@ -343,156 +350,4 @@ pub fn encode_revolution(
         pkt.emit(dst)?;
     }
     Ok(REVOLUTION_LEN)
-}
-
-/// Byte-at-a-time XV-11 stream decoder. See the module docs.
-#[derive(Clone, Debug)]
-pub struct Xv11Decoder {
-    hunt: HeaderHunt<PACKET_LEN, Xv11Header>,
-    last_speed_rpm_q6: Option<u16>,
-}
-
-impl Default for Xv11Decoder {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl Xv11Decoder {
-    /// A decoder waiting for a start byte.
-    pub const fn new() -> Self {
-        Self {
-            hunt: HeaderHunt::new(),
-            last_speed_rpm_q6: None,
-        }
-    }
-
-    /// Feeds received bytes; `on_point` is called for the 4 readings of every packet whose
-    /// checksum passed.
-    pub fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
-        for &b in bytes {
-            self.push_byte(b, &mut on_point);
-        }
-    }
-
-    /// Feeds one byte (see [`Xv11Decoder::feed`]).
-    pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
-        let speed = &mut self.last_speed_rpm_q6;
-        self.hunt.push_frame_byte(byte, &mut |packet| {
-            // The verdict on a whole packet held by the hunt (it opens with `0xFA` and an
-            // index byte); an accepted packet's readings go to `on_point`.
-            match Xv11Packet::parse(packet) {
-                Ok(p) => {
-                    *speed = Some(p.speed_rpm_q6);
-                    for j in 0..READINGS_PER_PACKET {
-                        on_point(p.point(j));
-                    }
-                    Verdict::Accept {
-                        points: READINGS_PER_PACKET as u32,
-                    }
-                }
-                Err(e) => e.verdict(),
-            }
-        });
-    }
-
-    /// The counters. `bytes == 22 · frames_ok + skipped_bytes +` [`Xv11Decoder::buffered`]
-    /// always holds (an index is checked before the packet is buffered, so `bad_frames` stays 0).
-    pub fn stats(&self) -> DecoderStats {
-        self.hunt.stats()
-    }
-
-    /// Bytes of a partial packet held.
-    pub fn buffered(&self) -> usize {
-        self.hunt.len()
-    }
-
-    /// Rotation speed of the last good packet, rpm × 64.
-    pub fn last_speed_rpm_q6(&self) -> Option<u16> {
-        self.last_speed_rpm_q6
-    }
-
-    /// Forgets any partial packet and zeroes the counters.
-    pub fn reset(&mut self) {
-        *self = Self::new();
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The checksum as written in the community notes, in u64 (no wrapping to reason about).
-    fn checksum_ref(p: &[u8]) -> u16 {
-        let mut c: u64 = 0;
-        for t in 0..10 {
-            c = (c << 1) + u64::from(p[2 * t]) + (u64::from(p[2 * t + 1]) << 8);
-        }
-        (((c & 0x7FFF) + (c >> 15)) & 0x7FFF) as u16
-    }
-
-    #[test]
-    fn checksum_matches_reference_and_round_trip() {
-        let pkt = Xv11Packet {
-            packet: 37,
-            speed_rpm_q6: 300 * 64,
-            readings: [
-                Xv11Reading {
-                    distance_mm: 1234,
-                    invalid: false,
-                    strength_warning: false,
-                    strength: 500,
-                },
-                Xv11Reading {
-                    distance_mm: 0x35,
-                    invalid: true,
-                    strength_warning: false,
-                    strength: 0,
-                },
-                Xv11Reading {
-                    distance_mm: 16_383,
-                    invalid: false,
-                    strength_warning: true,
-                    strength: 65_535,
-                },
-                Xv11Reading::default(),
-            ],
-        };
-        let mut b = [0u8; 22];
-        pkt.emit(&mut b).unwrap();
-        assert_eq!(&b[..4], &[0xFA, 0xA0 + 37, 0x00, 0x4B]);
-        assert_eq!(&b[4..8], &[0xD2, 0x04, 0xF4, 0x01]);
-        assert_eq!(b[9], 0x80);
-        assert_eq!(b[13], 0x7F);
-        assert_eq!(u16::from_le_bytes([b[20], b[21]]), checksum_ref(&b));
-        assert_eq!(Xv11Packet::parse(&b), Ok(pkt));
-        let p = pkt.point(1);
-        assert!(!p.valid);
-        assert_eq!(pkt.point(2).angle_cw_deg, 150.0);
-        assert!(!pkt.point(3).valid);
-    }
-
-    #[test]
-    fn decoder_resyncs_and_counts() {
-        let readings: [Xv11Reading; 360] =
-            core::array::from_fn(|a| Xv11Reading::from_range_m(0.2 + a as f32 * 0.01, 100));
-        let mut rev = vec![0u8; REVOLUTION_LEN];
-        encode_revolution(&readings, 300 * 64, &mut rev).unwrap();
-        let mut s = vec![0xFA, 0x00, 0x13];
-        s.extend_from_slice(&rev[..100]);
-        s.extend_from_slice(&rev[105..]); // packet 4 loses 5 bytes
-        let mut d = Xv11Decoder::new();
-        let mut pts = Vec::new();
-        d.feed(&s, |p| pts.push(p));
-        let st = d.stats();
-        assert_eq!(st.frames_ok, 89);
-        assert_eq!(st.bad_checksum, 1);
-        assert_eq!(pts.len(), 356);
-        assert!(pts.iter().all(|p| (p.angle_cw_deg as usize) / 4 != 4));
-        assert_eq!(
-            st.bytes as usize,
-            22 * st.frames_ok as usize + st.skipped_bytes as usize + d.buffered()
-        );
-        assert_eq!(d.last_speed_rpm_q6(), Some(19_200));
-    }
 }
