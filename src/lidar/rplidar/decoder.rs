@@ -122,7 +122,7 @@ impl RplidarDecoder {
                         break;
                     }
                     self.response_bytes = self.response_bytes.saturating_add(n as u32);
-                    let p = self.hunt.held();
+                    let p = self.hunt.buf().get(..n).unwrap_or(&[]);
                     if n == INFO_LEN {
                         self.info = DeviceInfo::parse(p).ok();
                     } else {
@@ -189,7 +189,7 @@ impl RplidarDecoder {
     /// rejected node it slides by one byte, unless `A5 5A` starts there: perhaps a new response
     /// descriptor, the scan was restarted).
     fn node(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
-        let verdict = match RplidarNode::parse(self.hunt.held()) {
+        let verdict = match RplidarNode::parse(self.hunt.buf()) {
             Ok(node) => {
                 if node.start {
                     bump(&mut self.revolutions_flagged);

@@ -122,7 +122,8 @@ impl Descriptor {
         let b = bytes
             .get(..DESCRIPTOR_LEN)
             .ok_or(RplidarError::Truncated(bytes.len()))?;
-        if b.get(descriptor::SYNC) != Some(&[SYNC, SYNC2][..]) {
+        // Byte by byte, as the decoder's own test of the prefix (which then folds this one away).
+        if !matches!(b.get(descriptor::SYNC), Some(&[SYNC, SYNC2])) {
             return Err(RplidarError::BadSync);
         }
         let word = wire::get_u32(b, descriptor::LEN_MODE);
