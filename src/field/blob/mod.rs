@@ -30,7 +30,7 @@
 //! accepts a blob at the start of a longer region (a flash partition) and returns the rest.
 //!
 //! Layering: the offsets of the header's fields and the format's constants are in
-//! `src/field/layout.rs`, the bottom of `src/field/`, which both [`FieldHeader::write_fields`]
+//! `src/field/layout.rs`, the bottom of `src/field/`, which both `FieldHeader::write_fields`
 //! and `parse_blob` read; this module imports only it and `grid` (the grid check), never the
 //! encodings built on it (`tiled`) or the views above. [`BlobError`] is in `error.rs`.
 
