@@ -195,6 +195,7 @@ pub mod raycast;
 pub mod scan;
 pub mod sonar;
 pub mod tempered;
+mod wire;
 
 pub use beam::{BeamModel, Components, BEAM_LOG_FLOOR};
 pub use beam_field::BeamFieldModel;

@@ -1,9 +1,12 @@
 //! The geometry check shared by the grids stored in a blob (the distance field's header and the
 //! free-space section's grid): size, cell size and origin, each grid mapping a fault to its own
 //! error type.
+//!
+//! Layering: this module sits just above `layout` and imports nothing else of `src/field/`; each
+//! grid's module implements the conversion of [`GridFault`] into its own error type with
+//! [`from_grid_fault`].
 
-use super::blob::{BlobError, BLOB_MAX_SIDE};
-use super::free_space::FreeSpaceError;
+use super::layout::BLOB_MAX_SIDE;
 
 /// What a grid's geometry can get wrong, in the order it is checked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,7 +52,8 @@ pub(crate) fn check_grid<C>(
     Ok(count)
 }
 
-/// Each grid's error type has a variant of the same name for every fault.
+/// `From<GridFault>` for error types that have a variant of the same name for every fault
+/// (invoked by each grid's module on its own error type).
 macro_rules! from_grid_fault {
     ($($error:ty),+) => {$(
         impl From<GridFault> for $error {
@@ -64,4 +68,4 @@ macro_rules! from_grid_fault {
         }
     )+};
 }
-from_grid_fault!(BlobError, FreeSpaceError);
+pub(crate) use from_grid_fault;

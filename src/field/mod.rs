@@ -16,11 +16,17 @@
 //!
 //! The host tool (`beamfield field build`) runs the transform on a map and writes the blob; the
 //! device links the blob and parses it once at boot.
+//!
+//! Layering, bottom up (a module imports only those before it): `layout` (the format's
+//! constants, the header's and the tiled preamble's field tables, the CRC), `grid` (the grid
+//! check), [`blob`], [`tiled`], [`view`], then [`likelihood`] → [`prepared`] and [`free_space`];
+//! [`edt`] stands alone.
 
 pub mod blob;
 pub mod edt;
 pub mod free_space;
 mod grid;
+mod layout;
 pub mod likelihood;
 pub mod prepared;
 pub mod tiled;

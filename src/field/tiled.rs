@@ -24,37 +24,26 @@
 //! `docs/blob-format.md` lists the alternatives (larger tiles, per-tile base and narrow
 //! residuals, per-tile planes); this is the one whose lookup stays within a few instructions of
 //! a raw byte read.
+//!
+//! Layering: the preamble's offsets, the constants and the payload-length arithmetic are in
+//! `src/field/layout.rs` (which `blob` reads too, to check a tiled payload's length without
+//! importing this module); this module builds on `blob` and `layout` only.
 
-use super::blob::{BlobError, FieldHeader, BLOB_HEADER_LEN, CODE_MAX};
-
-/// Distance encoding 2: u8 codes as encoding 1, in deduplicated 4 × 4 tiles.
-pub const ENCODING_TILED: u8 = 2;
-/// Side of a tile, cells.
-pub const TILE_SIDE: u32 = 4;
-/// Cells (and bytes) per tile.
-pub const TILE_CELLS: usize = 16;
-/// Bytes of the tiled payload before the tile index.
-pub const TILED_PREAMBLE_LEN: usize = 8;
-/// Most tiles a pool can hold (the index entries are u16).
-pub const TILED_MAX_POOL_TILES: u32 = 1 << 16;
+use super::blob::{BlobError, FieldHeader};
+use super::layout::{self, preamble as field, tiled_payload_len as payload_len, CRC32};
+use super::layout::{BLOB_HEADER_LEN, CODE_MAX};
+pub use super::layout::{
+    ENCODING_TILED, TILED_MAX_POOL_TILES, TILED_PREAMBLE_LEN, TILE_CELLS, TILE_SIDE,
+};
+use crate::wire;
 
 /// The tile grid of a map: tiles per row, rows of tiles, tiles.
 fn tile_grid(header: &FieldHeader) -> Result<(u32, u32, usize), BlobError> {
     header.validate()?;
-    let tw = header.width.div_ceil(TILE_SIDE);
-    let th = header.height.div_ceil(TILE_SIDE);
-    let tiles = (tw as usize)
-        .checked_mul(th as usize)
-        .ok_or(BlobError::TooLarge)?;
-    Ok((tw, th, tiles))
-}
-
-/// Payload length of a tiled blob with `pool_tiles` tiles in its pool, or `None` on overflow.
-fn payload_len(tiles: usize, pool_tiles: usize) -> Option<usize> {
-    tiles
-        .checked_mul(2)?
-        .checked_add(TILED_PREAMBLE_LEN)?
-        .checked_add(pool_tiles.checked_mul(TILE_CELLS)?)
+    match layout::tile_grid(header.width, header.height) {
+        (tw, th, Some(tiles)) => Ok((tw, th, tiles)),
+        _ => Err(BlobError::TooLarge),
+    }
 }
 
 /// Length of the `scratch` [`emit_blob_tiled`] needs for `header`, in `u32`s: a hash table of
@@ -210,7 +199,7 @@ pub fn emit_blob_tiled_clamped(
             next += 1;
         }
     }
-    let payload_crc = super::blob::CRC32.checksum(payload);
+    let payload_crc = CRC32.checksum(payload);
     let mut hd = [0u8; BLOB_HEADER_LEN];
     header.write_fields(
         &mut hd,
@@ -226,28 +215,10 @@ pub fn emit_blob_tiled_clamped(
 /// The preamble of a payload with `pool_tiles` tiles.
 fn preamble(pool_tiles: u32) -> [u8; TILED_PREAMBLE_LEN] {
     let mut p = [0u8; TILED_PREAMBLE_LEN];
-    let side = (TILE_SIDE as u16).to_le_bytes();
-    let n = pool_tiles.to_le_bytes();
-    for (d, s) in p.iter_mut().zip(side.iter().chain(&[0, 0]).chain(n.iter())) {
-        *d = *s;
-    }
+    wire::put_u16(&mut p, field::TILE_SIDE, TILE_SIDE as u16);
+    wire::put_u16(&mut p, field::RESERVED, 0);
+    wire::put_u32(&mut p, field::POOL_TILES, pool_tiles);
     p
-}
-
-/// Whether a payload length is possible for a tiled blob of `header`'s grid (checked before
-/// the payload is read, like encoding 1's `W·H` rule).
-#[cfg(feature = "tiled-field")]
-pub(crate) fn payload_len_possible(header: &FieldHeader, len: usize) -> bool {
-    let Ok((_, _, tiles)) = tile_grid(header) else {
-        return false;
-    };
-    match (
-        payload_len(tiles, 1),
-        payload_len(tiles, TILED_MAX_POOL_TILES as usize),
-    ) {
-        (Some(lo), Some(hi)) => len >= lo && len <= hi && (len - lo) % TILE_CELLS == 0,
-        _ => false,
-    }
 }
 
 /// A validated tiled payload: every index entry names a pool tile, so a lookup of a cell on
@@ -283,10 +254,9 @@ impl<'a> TiledCells<'a> {
         let pre = payload
             .get(..TILED_PREAMBLE_LEN)
             .ok_or(BlobError::Truncated)?;
-        let b = |i: usize| pre.get(i).copied().unwrap_or(0);
-        let side = u16::from_le_bytes([b(0), b(1)]);
-        let reserved = u16::from_le_bytes([b(2), b(3)]);
-        let pool_tiles = u32::from_le_bytes([b(4), b(5), b(6), b(7)]);
+        let side = wire::get_u16(pre, field::TILE_SIDE);
+        let reserved = wire::get_u16(pre, field::RESERVED);
+        let pool_tiles = wire::get_u32(pre, field::POOL_TILES);
         if u32::from(side) != TILE_SIDE
             || reserved != 0
             || pool_tiles == 0
@@ -376,7 +346,8 @@ impl FullTileRows<'_> {
 #[cfg(test)]
 #[cfg(feature = "tiled-field")]
 mod tests {
-    use super::super::blob::{parse_blob, CRC32};
+    use super::super::blob::parse_blob;
+    use super::super::layout::CRC32;
     use super::super::view::FieldView;
     use super::*;
 

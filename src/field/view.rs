@@ -421,4 +421,20 @@ mod tests {
         let (v, rest) = FieldView::parse_prefix(&b).unwrap();
         assert_eq!((v.width(), rest), (3, &[0xFF][..]));
     }
+
+    /// Without the `tiled-field` feature a tiled blob is a typed error, not a misread.
+    #[cfg(not(feature = "tiled-field"))]
+    #[test]
+    fn tiled_blob_needs_the_feature() {
+        use super::super::tiled::{emit_blob_tiled, tiled_max_len, tiled_scratch_len};
+        let h = FieldHeader::new(3, 2, 0.5, 1.0, 2.0);
+        let codes = [0, 1, 2, 253, 254, 255];
+        let mut scratch = vec![0u32; tiled_scratch_len(&h).unwrap()];
+        let mut out = vec![0u8; tiled_max_len(&h).unwrap()];
+        let n = emit_blob_tiled(&h, &codes, &mut scratch, &mut out).unwrap();
+        assert_eq!(
+            FieldView::parse(&out[..n]).err(),
+            Some(BlobError::UnsupportedEncoding(2))
+        );
+    }
 }

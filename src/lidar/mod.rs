@@ -100,7 +100,8 @@ pub struct DecoderStats {
     /// Bytes discarded while searching for a frame header (start-up garbage, the rest of a
     /// frame whose checksum failed up to the next header candidate, lost alignment).
     pub skipped_bytes: u32,
-    /// How many times the decoder started discarding bytes (one per run of skipped bytes).
+    /// How many times the decoder started discarding bytes (one per run of skipped bytes; a
+    /// frame consumed as a frame, counted in `frames_ok` or `bad_frames`, ends a run).
     pub resyncs: u32,
     /// Points handed to the caller.
     pub points: u32,

@@ -1,11 +1,44 @@
 //! The byte-at-a-time decoder of a response stream: descriptors, single responses, then scan
 //! nodes.
+//!
+//! Contract: the buffer and every counter of [`DecoderStats`] belong to the shared header hunt
+//! (`src/lidar/sync.rs`); this file keeps the response state machine, judges each node
+//! ([`RplidarNode::parse`]) and hands the verdict to the hunt, which counts it and slides past a
+//! rejected node.
 
 use super::messages::{Descriptor, DeviceInfo, Health};
 use super::node::RplidarNode;
 use super::{RplidarError, DESCRIPTOR_LEN, HEALTH_LEN, INFO_LEN, NODE_LEN, SYNC, SYNC2};
-use crate::lidar::sync::SkipCounter;
+use crate::lidar::sync::{Header, HeaderHunt, Verdict};
 use crate::lidar::{bump, DecoderStats, LidarPoint};
+
+/// The start of a response descriptor, `A5 5A`: what a rejected node may turn out to be.
+#[derive(Clone, Copy, Debug)]
+struct DescriptorSync;
+
+impl Header for DescriptorSync {
+    const FIRST: u8 = SYNC;
+    #[inline(always)]
+    fn second(byte: u8) -> bool {
+        byte == SYNC2
+    }
+}
+
+impl RplidarError {
+    /// What a node's rejection means for the stream (see [`Verdict`]).
+    #[inline(always)]
+    const fn verdict(self) -> Verdict {
+        match self {
+            // The node's only check of its bytes: its flag and check bits.
+            Self::Truncated(_) | Self::BadStartFlag | Self::BadCheckBit => Verdict::BadChecksum,
+            Self::AngleOutOfRange => Verdict::Impossible,
+            // Not node errors; never returned by `RplidarNode::parse`.
+            Self::BadSync | Self::UnknownResponse(_) | Self::UnknownCommand(_) => {
+                Verdict::BadChecksum
+            }
+        }
+    }
+}
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
@@ -20,13 +53,12 @@ enum State {
 /// Byte-at-a-time RPLIDAR response decoder: descriptors, GET_INFO and GET_HEALTH responses, and
 /// the nodes of a standard scan.
 #[derive(Clone, Debug)]
-// Declaration order kept: the buffer at offset 0 spares the byte loop a base register (on a
-// Cortex-M4 the compiler's own field order cost about 4% more instructions per byte).
+// Declaration order kept: the buffer (at offset 0 of the hunt) first spares the byte loop a base
+// register (on a Cortex-M4 the compiler's own field order cost about 4% more instructions per
+// byte).
 #[repr(C)]
 pub struct RplidarDecoder {
-    buf: [u8; INFO_LEN],
-    len: usize,
-    counter: SkipCounter,
+    hunt: HeaderHunt<INFO_LEN, DescriptorSync>,
     state: State,
     response_bytes: u32,
     info: Option<DeviceInfo>,
@@ -48,9 +80,7 @@ impl RplidarDecoder {
     pub const fn new() -> Self {
         Self {
             state: State::Descriptor,
-            buf: [0; INFO_LEN],
-            len: 0,
-            counter: SkipCounter::new(),
+            hunt: HeaderHunt::new(),
             response_bytes: 0,
             info: None,
             health: None,
@@ -77,11 +107,7 @@ impl RplidarDecoder {
 
     /// Feeds one byte (see [`RplidarDecoder::feed`]).
     pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
-        bump(&mut self.counter.stats.bytes);
-        if let Some(slot) = self.buf.get_mut(self.len) {
-            *slot = byte;
-            self.len += 1;
-        }
+        self.hunt.append(byte);
         // Each pass consumes bytes, or waits for more, or moves to a state that will.
         loop {
             match self.state {
@@ -91,22 +117,23 @@ impl RplidarDecoder {
                     }
                 }
                 State::Payload(n) => {
-                    if self.len < usize::from(n) {
+                    let n = usize::from(n);
+                    if self.hunt.len() < n {
                         break;
                     }
-                    self.response_bytes = self.response_bytes.saturating_add(u32::from(n));
-                    let p = self.buf.get(..usize::from(n)).unwrap_or(&[]);
-                    if usize::from(n) == INFO_LEN {
+                    self.response_bytes = self.response_bytes.saturating_add(n as u32);
+                    let p = self.hunt.buf().get(..n).unwrap_or(&[]);
+                    if n == INFO_LEN {
                         self.info = DeviceInfo::parse(p).ok();
                     } else {
                         self.health = Health::parse(p).ok();
                     }
-                    bump(&mut self.counter.stats.frames_ok);
-                    self.consume(usize::from(n));
+                    // A single response counts in `frames_ok`, with no point.
+                    self.hunt.settle_sliding(Verdict::Accept { points: 0 }, n);
                     self.state = State::Descriptor;
                 }
                 State::Nodes => {
-                    if self.len < NODE_LEN {
+                    if self.hunt.len() < NODE_LEN {
                         break;
                     }
                     self.node(on_point);
@@ -118,7 +145,7 @@ impl RplidarDecoder {
     /// Works on a (possible) descriptor at the front of the buffer; false when it needs more
     /// bytes.
     fn descriptor(&mut self) -> bool {
-        let head = self.buf.get(..self.len).unwrap_or(&[]);
+        let head = self.hunt.held();
         let ok_prefix = matches!(head, [SYNC] | [SYNC, SYNC2, ..]);
         if !ok_prefix {
             if head.is_empty() {
@@ -128,11 +155,11 @@ impl RplidarDecoder {
                 // Not a descriptor after all: back to nodes, from the same bytes.
                 self.state = State::Nodes;
             } else {
-                self.drop_front(1);
+                self.hunt.skip_front(1);
             }
             return true;
         }
-        if self.len < DESCRIPTOR_LEN {
+        if self.hunt.len() < DESCRIPTOR_LEN {
             return false;
         }
         let next = match Descriptor::parse(head) {
@@ -143,69 +170,45 @@ impl RplidarDecoder {
         };
         match next {
             Some(state) => {
-                self.counter.synced();
                 self.response_bytes = self.response_bytes.saturating_add(DESCRIPTOR_LEN as u32);
-                self.consume(DESCRIPTOR_LEN);
+                self.hunt.accept_header(DESCRIPTOR_LEN);
                 self.scanning = state == State::Nodes;
                 self.state = state;
             }
             None if self.scanning => {
                 // `A5 5A` inside node data: slide by one byte and read nodes again.
-                self.drop_front(1);
+                self.hunt.skip_front(1);
                 self.state = State::Nodes;
             }
-            None => self.drop_front(1),
+            None => self.hunt.skip_front(1),
         }
         true
     }
 
+    /// Judges the node at the front of the buffer; the hunt settles the verdict (after a
+    /// rejected node it slides by one byte, unless `A5 5A` starts there: perhaps a new response
+    /// descriptor, the scan was restarted).
     fn node(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
-        match RplidarNode::parse(self.buf.get(..NODE_LEN).unwrap_or(&[])) {
+        let verdict = match RplidarNode::parse(self.hunt.buf()) {
             Ok(node) => {
-                self.consume(NODE_LEN);
-                self.counter.synced();
-                bump(&mut self.counter.stats.frames_ok);
-                bump(&mut self.counter.stats.points);
                 if node.start {
                     bump(&mut self.revolutions_flagged);
                 }
                 on_point(node.point());
+                Verdict::Accept { points: 1 }
             }
-            Err(RplidarError::AngleOutOfRange) => {
-                self.consume(NODE_LEN);
-                bump(&mut self.counter.stats.bad_frames);
-            }
-            Err(_) => {
-                bump(&mut self.counter.stats.bad_checksum);
-                if self.buf.starts_with(&[SYNC, SYNC2]) {
-                    // Perhaps a new response descriptor (the scan was restarted).
-                    self.state = State::Descriptor;
-                } else {
-                    self.drop_front(1);
-                }
-            }
+            Err(e) => e.verdict(),
+        };
+        if self.hunt.settle_sliding(verdict, NODE_LEN) {
+            self.state = State::Descriptor;
         }
-    }
-
-    /// Removes `n` bytes that were used.
-    fn consume(&mut self, n: usize) {
-        let n = n.min(self.len);
-        self.buf.copy_within(n..self.len, 0);
-        self.len -= n;
-    }
-
-    fn drop_front(&mut self, n: usize) {
-        let n = n.min(self.len);
-        self.counter.skip(n);
-        self.buf.copy_within(n..self.len, 0);
-        self.len -= n;
     }
 
     /// The counters. `frames_ok` counts nodes and single responses. Every byte is accounted
     /// for: `bytes == 5·(nodes ok + bad_frames) + response_bytes() + skipped_bytes + buffered()`,
     /// where nodes ok is `frames_ok` minus the single responses.
     pub fn stats(&self) -> DecoderStats {
-        self.counter.stats
+        self.hunt.stats()
     }
 
     /// Bytes of descriptors and single-response payloads consumed.
@@ -215,7 +218,7 @@ impl RplidarDecoder {
 
     /// Bytes held of an incomplete node, descriptor or response.
     pub fn buffered(&self) -> usize {
-        self.len
+        self.hunt.len()
     }
 
     /// The last GET_INFO response received.

@@ -1,8 +1,19 @@
 //! The requests a controller sends and the single responses it reads back: response
 //! descriptors, GET_INFO and GET_HEALTH.
 
-use super::{RplidarError, DESCRIPTOR_LEN, HEALTH_LEN, INFO_LEN, NODE_LEN, SYNC, SYNC2};
+use super::field::{descriptor, health, info, request};
+use super::{
+    RplidarError, DESCRIPTOR_LEN, HEALTH_LEN, INFO_LEN, NODE_LEN, REQUEST_LEN, SYNC, SYNC2,
+};
 use crate::lidar::{room, EncodeError};
+use crate::wire;
+
+/// `bytes[at] = value`, when `at` is in `bytes`.
+fn set(bytes: &mut [u8], at: usize, value: u8) {
+    if let Some(b) = bytes.get_mut(at) {
+        *b = value;
+    }
+}
 
 /// The requests a controller sends. Each is two bytes, `0xA5` and the command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,8 +52,10 @@ impl Command {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(self, out: &mut [u8]) -> Result<usize, EncodeError> {
-        room(out, 2)?.copy_from_slice(&[SYNC, self.code()]);
-        Ok(2)
+        let o = room(out, REQUEST_LEN)?;
+        set(o, request::SYNC, SYNC);
+        set(o, request::COMMAND, self.code());
+        Ok(REQUEST_LEN)
     }
 
     /// Parses a request (what a sensor, or a simulator of one, receives).
@@ -50,19 +63,22 @@ impl Command {
     /// # Errors
     /// [`RplidarError::Truncated`], [`RplidarError::BadSync`], [`RplidarError::UnknownCommand`].
     pub fn parse(bytes: &[u8]) -> Result<Self, RplidarError> {
-        match bytes {
-            [SYNC, c, ..] => Ok(match *c {
-                0x25 => Self::Stop,
-                0x40 => Self::Reset,
-                0x20 => Self::Scan,
-                0x21 => Self::ForceScan,
-                0x50 => Self::GetInfo,
-                0x52 => Self::GetHealth,
-                other => return Err(RplidarError::UnknownCommand(other)),
-            }),
-            [_, _, ..] => Err(RplidarError::BadSync),
-            _ => Err(RplidarError::Truncated(bytes.len())),
+        let (Some(&sync), Some(&c)) = (bytes.get(request::SYNC), bytes.get(request::COMMAND))
+        else {
+            return Err(RplidarError::Truncated(bytes.len()));
+        };
+        if sync != SYNC {
+            return Err(RplidarError::BadSync);
         }
+        Ok(match c {
+            0x25 => Self::Stop,
+            0x40 => Self::Reset,
+            0x20 => Self::Scan,
+            0x21 => Self::ForceScan,
+            0x50 => Self::GetInfo,
+            0x52 => Self::GetHealth,
+            other => return Err(RplidarError::UnknownCommand(other)),
+        })
     }
 }
 
@@ -103,18 +119,19 @@ impl Descriptor {
     /// # Errors
     /// [`RplidarError::Truncated`], [`RplidarError::BadSync`].
     pub fn parse(bytes: &[u8]) -> Result<Self, RplidarError> {
-        match bytes {
-            [SYNC, SYNC2, a, b, c, d, t, ..] => {
-                let word = u32::from_le_bytes([*a, *b, *c, *d]);
-                Ok(Self {
-                    len: word & 0x3FFF_FFFF,
-                    mode: (word >> 30) as u8,
-                    data_type: *t,
-                })
-            }
-            [_, _, _, _, _, _, _, ..] => Err(RplidarError::BadSync),
-            _ => Err(RplidarError::Truncated(bytes.len())),
+        let b = bytes
+            .get(..DESCRIPTOR_LEN)
+            .ok_or(RplidarError::Truncated(bytes.len()))?;
+        // Byte by byte, as the decoder's own test of the prefix (which then folds this one away).
+        if !matches!(b.get(descriptor::SYNC), Some(&[SYNC, SYNC2])) {
+            return Err(RplidarError::BadSync);
         }
+        let word = wire::get_u32(b, descriptor::LEN_MODE);
+        Ok(Self {
+            len: word & 0x3FFF_FFFF,
+            mode: (word >> 30) as u8,
+            data_type: b.get(descriptor::DATA_TYPE).copied().unwrap_or(0),
+        })
     }
 
     /// Writes the 7 descriptor bytes; returns [`DESCRIPTOR_LEN`].
@@ -124,8 +141,9 @@ impl Descriptor {
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
         let o = room(out, DESCRIPTOR_LEN)?;
         let word = (self.len & 0x3FFF_FFFF) | (u32::from(self.mode & 3) << 30);
-        let [a, b, c, d] = word.to_le_bytes();
-        o.copy_from_slice(&[SYNC, SYNC2, a, b, c, d, self.data_type]);
+        wire::put(o, descriptor::SYNC, &[SYNC, SYNC2]);
+        wire::put_u32(o, descriptor::LEN_MODE, word);
+        set(o, descriptor::DATA_TYPE, self.data_type);
         Ok(DESCRIPTOR_LEN)
     }
 }
@@ -152,20 +170,21 @@ impl DeviceInfo {
     /// # Errors
     /// [`RplidarError::Truncated`].
     pub fn parse(bytes: &[u8]) -> Result<Self, RplidarError> {
-        match bytes.get(..INFO_LEN) {
-            Some([model, fw_minor, fw_major, hw, serial @ ..]) => {
-                let mut s = [0u8; 16];
-                s.copy_from_slice(serial);
-                Ok(Self {
-                    model: *model,
-                    firmware_minor: *fw_minor,
-                    firmware_major: *fw_major,
-                    hardware: *hw,
-                    serial: s,
-                })
-            }
-            _ => Err(RplidarError::Truncated(bytes.len())),
+        let b: &[u8; INFO_LEN] = bytes
+            .get(..INFO_LEN)
+            .and_then(|s| s.try_into().ok())
+            .ok_or(RplidarError::Truncated(bytes.len()))?;
+        let mut serial = [0u8; 16];
+        if let Some(s) = b.get(info::SERIAL) {
+            serial.copy_from_slice(s);
         }
+        Ok(Self {
+            model: b[info::MODEL],
+            firmware_minor: b[info::FIRMWARE_MINOR],
+            firmware_major: b[info::FIRMWARE_MAJOR],
+            hardware: b[info::HARDWARE],
+            serial,
+        })
     }
 
     /// Writes the descriptor and the payload (27 bytes); returns the count.
@@ -177,14 +196,13 @@ impl DeviceInfo {
         let o = room(out, needed)?;
         let (d, p) = o.split_at_mut(DESCRIPTOR_LEN);
         Descriptor::INFO.emit(d)?;
-        let (head, serial) = p.split_at_mut(4);
-        head.copy_from_slice(&[
-            self.model,
-            self.firmware_minor,
-            self.firmware_major,
-            self.hardware,
-        ]);
-        serial.copy_from_slice(&self.serial);
+        set(p, info::MODEL, self.model);
+        set(p, info::FIRMWARE_MINOR, self.firmware_minor);
+        set(p, info::FIRMWARE_MAJOR, self.firmware_major);
+        set(p, info::HARDWARE, self.hardware);
+        if let Some(serial) = p.get_mut(info::SERIAL) {
+            serial.copy_from_slice(&self.serial);
+        }
         Ok(needed)
     }
 }
@@ -205,13 +223,13 @@ impl Health {
     /// # Errors
     /// [`RplidarError::Truncated`].
     pub fn parse(bytes: &[u8]) -> Result<Self, RplidarError> {
-        match bytes {
-            [status, lo, hi, ..] => Ok(Self {
-                status: *status,
-                error_code: u16::from_le_bytes([*lo, *hi]),
-            }),
-            _ => Err(RplidarError::Truncated(bytes.len())),
-        }
+        let b = bytes
+            .get(..HEALTH_LEN)
+            .ok_or(RplidarError::Truncated(bytes.len()))?;
+        Ok(Self {
+            status: b.get(health::STATUS).copied().unwrap_or(0),
+            error_code: wire::get_u16(b, health::ERROR_CODE),
+        })
     }
 
     /// Writes the descriptor and the payload (10 bytes); returns the count.
@@ -223,8 +241,8 @@ impl Health {
         let o = room(out, needed)?;
         let (d, p) = o.split_at_mut(DESCRIPTOR_LEN);
         Descriptor::HEALTH.emit(d)?;
-        let [lo, hi] = self.error_code.to_le_bytes();
-        p.copy_from_slice(&[self.status, lo, hi]);
+        set(p, health::STATUS, self.status);
+        wire::put_u16(p, health::ERROR_CODE, self.error_code);
         Ok(needed)
     }
 }

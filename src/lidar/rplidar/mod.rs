@@ -27,6 +27,8 @@
 //! are weaker than a CRC (a random 5-byte window passes them one time in four), so after a failed
 //! node the decoder slides by one byte, and the assembler's rotor tracking keeps stray points from
 //! merging revolutions.
+//!
+//! Every parse and emit of this module places its fields through the one table `field` below.
 
 mod decoder;
 mod messages;
@@ -54,6 +56,87 @@ pub const INFO_LEN: usize = 20;
 pub const HEALTH_LEN: usize = 3;
 /// A full turn in angle_q6 units (360 · 64).
 pub const FULL_TURN_Q6: u16 = 23_040;
+/// Bytes per request (the commands here carry no payload).
+const REQUEST_LEN: usize = 2;
+
+/// Where each field lies (offsets in bytes) in a request, a descriptor, the single responses and
+/// a scan node: the one table the parse and the emit side read.
+mod field {
+    /// A request.
+    pub mod request {
+        /// [`SYNC`](super::super::SYNC).
+        pub const SYNC: usize = 0;
+        /// The command byte.
+        pub const COMMAND: usize = 1;
+    }
+
+    /// A response descriptor.
+    pub mod descriptor {
+        use crate::wire::Field;
+
+        /// `A5 5A`.
+        pub const SYNC: Field = 0..2;
+        /// Response length (low 30 bits) and send mode (top 2 bits), one `u32`.
+        pub const LEN_MODE: Field = 2..6;
+        /// Data type.
+        pub const DATA_TYPE: usize = 6;
+    }
+
+    /// The GET_INFO payload.
+    pub mod info {
+        use crate::wire::Rest;
+
+        /// Model id.
+        pub const MODEL: usize = 0;
+        /// Firmware version, minor part.
+        pub const FIRMWARE_MINOR: usize = 1;
+        /// Firmware version, major part.
+        pub const FIRMWARE_MAJOR: usize = 2;
+        /// Hardware version.
+        pub const HARDWARE: usize = 3;
+        /// The 16-byte serial number.
+        pub const SERIAL: Rest = 4..;
+    }
+
+    /// The GET_HEALTH payload.
+    pub mod health {
+        use crate::wire::Field;
+
+        /// Status.
+        pub const STATUS: usize = 0;
+        /// Error code.
+        pub const ERROR_CODE: Field = 1..3;
+    }
+
+    /// A scan node.
+    pub mod node {
+        use crate::wire::Field;
+
+        /// Quality (bits 7..2), `!S` (bit 1), `S` (bit 0).
+        pub const FLAGS: usize = 0;
+        /// angle_q6 bits 6..0 (bits 7..1), the check bit `C` (bit 0).
+        pub const ANGLE_LOW: usize = 1;
+        /// angle_q6 bits 14..7.
+        pub const ANGLE_HIGH: usize = 2;
+        /// distance_q2.
+        pub const DISTANCE: Field = 3..5;
+    }
+}
+
+// The tables cover each structure exactly.
+const _: () = {
+    use field::{descriptor, health, info, node, request};
+    assert!(request::SYNC == 0 && request::COMMAND + 1 == REQUEST_LEN);
+    assert!(descriptor::SYNC.start == 0 && descriptor::SYNC.end == descriptor::LEN_MODE.start);
+    assert!(descriptor::LEN_MODE.end == descriptor::DATA_TYPE);
+    assert!(descriptor::DATA_TYPE + 1 == DESCRIPTOR_LEN);
+    assert!(info::MODEL == 0 && info::HARDWARE + 1 == info::SERIAL.start);
+    assert!(INFO_LEN - info::SERIAL.start == 16);
+    assert!(health::STATUS == 0 && health::ERROR_CODE.start == 1);
+    assert!(health::ERROR_CODE.end == HEALTH_LEN);
+    assert!(node::FLAGS == 0 && node::ANGLE_LOW == 1 && node::ANGLE_HIGH == 2);
+    assert!(node::DISTANCE.start == 3 && node::DISTANCE.end == NODE_LEN);
+};
 
 /// Why bytes were rejected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

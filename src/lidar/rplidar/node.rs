@@ -1,7 +1,9 @@
 //! Scan nodes: one node's fields, its check bits, and the encoder of a whole revolution.
 
+use super::field::node;
 use super::{RplidarError, FULL_TURN_Q6, NODE_LEN};
 use crate::lidar::{range_units, room, EncodeError, LidarPoint};
+use crate::wire;
 
 /// One scan node, in the protocol's units.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -24,25 +26,26 @@ impl RplidarNode {
     /// [`RplidarError::Truncated`], [`RplidarError::BadStartFlag`],
     /// [`RplidarError::BadCheckBit`], [`RplidarError::AngleOutOfRange`].
     pub fn parse(bytes: &[u8]) -> Result<Self, RplidarError> {
-        let [b0, b1, b2, b3, b4] = match bytes.get(..NODE_LEN) {
-            Some(&[a, b, c, d, e]) => [a, b, c, d, e],
-            _ => return Err(RplidarError::Truncated(bytes.len())),
-        };
-        if (b0 & 1) == ((b0 >> 1) & 1) {
+        let b: &[u8; NODE_LEN] = bytes
+            .get(..NODE_LEN)
+            .and_then(|s| s.try_into().ok())
+            .ok_or(RplidarError::Truncated(bytes.len()))?;
+        let (flags, low) = (b[node::FLAGS], b[node::ANGLE_LOW]);
+        if (flags & 1) == ((flags >> 1) & 1) {
             return Err(RplidarError::BadStartFlag);
         }
-        if b1 & 1 == 0 {
+        if low & 1 == 0 {
             return Err(RplidarError::BadCheckBit);
         }
-        let angle_q6 = u16::from(b1 >> 1) | (u16::from(b2) << 7);
+        let angle_q6 = u16::from(low >> 1) | (u16::from(b[node::ANGLE_HIGH]) << 7);
         if angle_q6 >= FULL_TURN_Q6 {
             return Err(RplidarError::AngleOutOfRange);
         }
         Ok(Self {
-            start: b0 & 1 == 1,
-            quality: b0 >> 2,
+            start: flags & 1 == 1,
+            quality: flags >> 2,
             angle_q6,
-            distance_q2: u16::from_le_bytes([b3, b4]),
+            distance_q2: wire::get_u16(b, node::DISTANCE),
         })
     }
 
@@ -54,11 +57,20 @@ impl RplidarNode {
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
         let o = room(out, NODE_LEN)?;
         let s = u8::from(self.start);
-        let b0 = ((self.quality & 0x3F) << 2) | ((s ^ 1) << 1) | s;
-        let b1 = (((self.angle_q6 & 0x7F) as u8) << 1) | 1;
-        let b2 = ((self.angle_q6 >> 7) & 0xFF) as u8;
-        let [b3, b4] = self.distance_q2.to_le_bytes();
-        o.copy_from_slice(&[b0, b1, b2, b3, b4]);
+        let fields = [
+            (
+                node::FLAGS,
+                ((self.quality & 0x3F) << 2) | ((s ^ 1) << 1) | s,
+            ),
+            (node::ANGLE_LOW, (((self.angle_q6 & 0x7F) as u8) << 1) | 1),
+            (node::ANGLE_HIGH, ((self.angle_q6 >> 7) & 0xFF) as u8),
+        ];
+        for (at, byte) in fields {
+            if let Some(b) = o.get_mut(at) {
+                *b = byte;
+            }
+        }
+        wire::put_u16(o, node::DISTANCE, self.distance_q2);
         Ok(NODE_LEN)
     }
 

@@ -21,10 +21,20 @@
 //! `c = 0; for each w: c = 2·c + w` (in 32 bits); then `((c & 0x7FFF) + (c >> 15)) & 0x7FFF`.
 //!
 //! The decoder waits for `0xFA` followed by a valid index byte. After a failed checksum it looks
-//! for the next such pair inside the rejected bytes.
+//! for the next such pair inside the rejected bytes. Parse and emit place every field through
+//! the one table `field`; the decoder's packet check returns a verdict that the shared header
+//! hunt (`src/lidar/sync.rs`) settles (it counts, skips and resynchronises); the decoder is in
+//! `decoder.rs`.
 
-use super::sync::HeaderHunt;
-use super::{bump, range_units, room, DecoderStats, EncodeError, LidarPoint};
+use super::sync::{Header, Verdict};
+use super::{range_units, room, EncodeError, LidarPoint};
+use crate::wire;
+
+mod decoder;
+#[cfg(test)]
+mod tests;
+
+pub use decoder::Xv11Decoder;
 
 /// Start byte of a packet.
 pub const START: u8 = 0xFA;
@@ -39,10 +49,59 @@ pub const READINGS_PER_PACKET: usize = 4;
 /// Largest distance the 14-bit field carries, millimetres.
 pub const MAX_DISTANCE_MM: u16 = 0x3FFF;
 
+/// Where each field of a packet lies (offsets in bytes): the one table the parse and the emit
+/// side read.
+mod field {
+    use crate::wire::Field;
+
+    /// Start byte, [`START`](super::START).
+    pub const START: usize = 0;
+    /// Index byte, `0xA0 + packet`.
+    pub const INDEX: usize = 1;
+    /// Rotation speed, rpm × 64.
+    pub const SPEED: Field = 2..4;
+    /// The four readings, [`reading::LEN`] bytes each.
+    pub const READINGS: Field = 4..20;
+    /// The bytes the checksum covers (as ten 16-bit words).
+    pub const CHECKED: Field = 0..20;
+    /// Checksum of [`CHECKED`].
+    pub const CHECKSUM: Field = 20..22;
+
+    /// One reading, within [`READINGS`].
+    pub mod reading {
+        use crate::wire::Field;
+
+        /// Distance (the low 14 bits) and the flags (the top 2 bits), one `u16`.
+        pub const DISTANCE: Field = 0..2;
+        /// Signal strength.
+        pub const STRENGTH: Field = 2..4;
+        /// Bytes per reading.
+        pub const LEN: usize = 4;
+        /// The distance bits of [`DISTANCE`].
+        pub const DISTANCE_MASK: u16 = 0x3FFF;
+        /// "Invalid data": the distance bits are an error code.
+        pub const INVALID: u16 = 0x8000;
+        /// "Strength warning".
+        pub const STRENGTH_WARNING: u16 = 0x4000;
+    }
+}
+
+// The table covers the packet exactly.
+const _: () = {
+    assert!(field::START == 0 && field::INDEX == 1 && field::SPEED.start == 2);
+    assert!(field::SPEED.end == field::READINGS.start);
+    assert!(wire::len(&field::READINGS) == READINGS_PER_PACKET * field::reading::LEN);
+    assert!(
+        field::READINGS.end == field::CHECKSUM.start && field::CHECKED.end == field::CHECKSUM.start
+    );
+    assert!(field::CHECKSUM.end == PACKET_LEN);
+    assert!(field::reading::STRENGTH.end == field::reading::LEN);
+};
+
 /// The packet checksum of the first 20 bytes of `packet` (see the module docs).
 pub fn checksum(packet: &[u8]) -> u16 {
     let mut c: u32 = 0;
-    for w in packet.get(..20).unwrap_or(&[]).chunks_exact(2) {
+    for w in packet.get(field::CHECKED).unwrap_or(&[]).chunks_exact(2) {
         if let [lo, hi] = *w {
             c = (c << 1).wrapping_add(u32::from(u16::from_le_bytes([lo, hi])));
         }
@@ -52,6 +111,18 @@ pub fn checksum(packet: &[u8]) -> u16 {
 
 fn is_index(b: u8) -> bool {
     (FIRST_INDEX..FIRST_INDEX + PACKETS_PER_TURN as u8).contains(&b)
+}
+
+/// The packet header, `0xFA` and an index byte, for the shared header hunt.
+#[derive(Clone, Copy, Debug)]
+struct Xv11Header;
+
+impl Header for Xv11Header {
+    const FIRST: u8 = START;
+    #[inline(always)]
+    fn second(byte: u8) -> bool {
+        is_index(byte)
+    }
 }
 
 /// Why a packet was rejected by [`Xv11Packet::parse`].
@@ -91,6 +162,19 @@ impl core::fmt::Display for Xv11Error {
 }
 
 impl core::error::Error for Xv11Error {}
+
+impl Xv11Error {
+    /// What the rejection means for the stream (see [`Verdict`]).
+    #[inline(always)]
+    const fn verdict(self) -> Verdict {
+        match self {
+            Self::Truncated(_) | Self::BadStart | Self::BadChecksum { .. } => Verdict::BadChecksum,
+            // The hunt only buffers a packet after a valid index, so the decoder never meets
+            // this one.
+            Self::BadIndex(_) => Verdict::Impossible,
+        }
+    }
+}
 
 /// One reading, as transmitted.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -149,37 +233,37 @@ impl Xv11Packet {
     /// [`Xv11Error::Truncated`], [`Xv11Error::BadStart`], [`Xv11Error::BadChecksum`],
     /// [`Xv11Error::BadIndex`].
     pub fn parse(bytes: &[u8]) -> Result<Self, Xv11Error> {
-        let b = bytes
+        use field::reading;
+        let b: &[u8; PACKET_LEN] = bytes
             .get(..PACKET_LEN)
+            .and_then(|s| s.try_into().ok())
             .ok_or(Xv11Error::Truncated(bytes.len()))?;
-        let [start, index, s0, s1, body @ .., c0, c1] = b else {
-            return Err(Xv11Error::Truncated(bytes.len()));
-        };
-        if *start != START {
+        if b[field::START] != START {
             return Err(Xv11Error::BadStart);
         }
-        let carried = u16::from_le_bytes([*c0, *c1]);
+        let carried = wire::get_u16(b, field::CHECKSUM);
         let computed = checksum(b);
         if carried != computed {
             return Err(Xv11Error::BadChecksum { carried, computed });
         }
-        if !is_index(*index) {
-            return Err(Xv11Error::BadIndex(*index));
+        let index = b[field::INDEX];
+        if !is_index(index) {
+            return Err(Xv11Error::BadIndex(index));
         }
         let mut readings = [Xv11Reading::default(); READINGS_PER_PACKET];
-        for (r, c) in readings.iter_mut().zip(body.chunks_exact(4)) {
-            if let [d0, d1, s0, s1] = *c {
-                *r = Xv11Reading {
-                    distance_mm: u16::from_le_bytes([d0, d1 & 0x3F]),
-                    invalid: d1 & 0x80 != 0,
-                    strength_warning: d1 & 0x40 != 0,
-                    strength: u16::from_le_bytes([s0, s1]),
-                };
-            }
+        let body = b.get(field::READINGS).unwrap_or(&[]);
+        for (r, c) in readings.iter_mut().zip(body.chunks_exact(reading::LEN)) {
+            let d = wire::get_u16(c, reading::DISTANCE);
+            *r = Xv11Reading {
+                distance_mm: d & reading::DISTANCE_MASK,
+                invalid: d & reading::INVALID != 0,
+                strength_warning: d & reading::STRENGTH_WARNING != 0,
+                strength: wire::get_u16(c, reading::STRENGTH),
+            };
         }
         Ok(Self {
             packet: index - FIRST_INDEX,
-            speed_rpm_q6: u16::from_le_bytes([*s0, *s1]),
+            speed_rpm_q6: wire::get_u16(b, field::SPEED),
             readings,
         })
     }
@@ -191,23 +275,32 @@ impl Xv11Packet {
     /// # Errors
     /// [`EncodeError::BufferTooSmall`].
     pub fn emit(&self, out: &mut [u8]) -> Result<usize, EncodeError> {
+        use field::reading;
         let o = room(out, PACKET_LEN)?;
-        let [s0, s1] = self.speed_rpm_q6.to_le_bytes();
-        if let Some(head) = o.get_mut(..4) {
-            head.copy_from_slice(&[START, FIRST_INDEX.wrapping_add(self.packet), s0, s1]);
+        if let Some(start) = o.get_mut(field::START) {
+            *start = START;
         }
-        if let Some(body) = o.get_mut(4..20) {
-            for (c, r) in body.chunks_exact_mut(4).zip(self.readings.iter()) {
-                let [d0, d1] = (r.distance_mm & 0x3FFF).to_le_bytes();
-                let flags = (u8::from(r.invalid) << 7) | (u8::from(r.strength_warning) << 6);
-                let [t0, t1] = r.strength.to_le_bytes();
-                c.copy_from_slice(&[d0, d1 | flags, t0, t1]);
+        if let Some(index) = o.get_mut(field::INDEX) {
+            *index = FIRST_INDEX.wrapping_add(self.packet);
+        }
+        wire::put_u16(o, field::SPEED, self.speed_rpm_q6);
+        if let Some(body) = o.get_mut(field::READINGS) {
+            for (c, r) in body
+                .chunks_exact_mut(reading::LEN)
+                .zip(self.readings.iter())
+            {
+                let mut d = r.distance_mm & reading::DISTANCE_MASK;
+                if r.invalid {
+                    d |= reading::INVALID;
+                }
+                if r.strength_warning {
+                    d |= reading::STRENGTH_WARNING;
+                }
+                wire::put_u16(c, reading::DISTANCE, d);
+                wire::put_u16(c, reading::STRENGTH, r.strength);
             }
         }
-        let [c0, c1] = checksum(o).to_le_bytes();
-        if let Some(tail) = o.get_mut(20..) {
-            tail.copy_from_slice(&[c0, c1]);
-        }
+        wire::put_u16(o, field::CHECKSUM, checksum(o));
         Ok(PACKET_LEN)
     }
 
@@ -257,161 +350,4 @@ pub fn encode_revolution(
         pkt.emit(dst)?;
     }
     Ok(REVOLUTION_LEN)
-}
-
-/// Byte-at-a-time XV-11 stream decoder. See the module docs.
-#[derive(Clone, Debug)]
-pub struct Xv11Decoder {
-    hunt: HeaderHunt<PACKET_LEN>,
-    last_speed_rpm_q6: Option<u16>,
-}
-
-impl Default for Xv11Decoder {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl Xv11Decoder {
-    /// A decoder waiting for a start byte.
-    pub const fn new() -> Self {
-        Self {
-            hunt: HeaderHunt::new(),
-            last_speed_rpm_q6: None,
-        }
-    }
-
-    /// Feeds received bytes; `on_point` is called for the 4 readings of every packet whose
-    /// checksum passed.
-    pub fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
-        for &b in bytes {
-            self.push_byte(b, &mut on_point);
-        }
-    }
-
-    /// Feeds one byte (see [`Xv11Decoder::feed`]).
-    pub fn push_byte(&mut self, byte: u8, on_point: &mut impl FnMut(LidarPoint)) {
-        if self.hunt.push(byte, START, is_index) {
-            self.complete(on_point);
-        }
-    }
-
-    fn complete(&mut self, on_point: &mut impl FnMut(LidarPoint)) {
-        match Xv11Packet::parse(&self.hunt.buf) {
-            Ok(p) => {
-                self.hunt.accept();
-                let stats = &mut self.hunt.counter.stats;
-                bump(&mut stats.frames_ok);
-                self.last_speed_rpm_q6 = Some(p.speed_rpm_q6);
-                for j in 0..READINGS_PER_PACKET {
-                    on_point(p.point(j));
-                }
-                stats.points = stats.points.saturating_add(READINGS_PER_PACKET as u32);
-            }
-            Err(_) => {
-                bump(&mut self.hunt.counter.stats.bad_checksum);
-                self.hunt.rehunt(START, is_index);
-            }
-        }
-    }
-
-    /// The counters. `bytes == 22 · frames_ok + skipped_bytes +` [`Xv11Decoder::buffered`]
-    /// always holds (an index is checked before the packet is buffered, so `bad_frames` stays 0).
-    pub fn stats(&self) -> DecoderStats {
-        self.hunt.counter.stats
-    }
-
-    /// Bytes of a partial packet held.
-    pub fn buffered(&self) -> usize {
-        self.hunt.len
-    }
-
-    /// Rotation speed of the last good packet, rpm × 64.
-    pub fn last_speed_rpm_q6(&self) -> Option<u16> {
-        self.last_speed_rpm_q6
-    }
-
-    /// Forgets any partial packet and zeroes the counters.
-    pub fn reset(&mut self) {
-        *self = Self::new();
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The checksum as written in the community notes, in u64 (no wrapping to reason about).
-    fn checksum_ref(p: &[u8]) -> u16 {
-        let mut c: u64 = 0;
-        for t in 0..10 {
-            c = (c << 1) + u64::from(p[2 * t]) + (u64::from(p[2 * t + 1]) << 8);
-        }
-        (((c & 0x7FFF) + (c >> 15)) & 0x7FFF) as u16
-    }
-
-    #[test]
-    fn checksum_matches_reference_and_round_trip() {
-        let pkt = Xv11Packet {
-            packet: 37,
-            speed_rpm_q6: 300 * 64,
-            readings: [
-                Xv11Reading {
-                    distance_mm: 1234,
-                    invalid: false,
-                    strength_warning: false,
-                    strength: 500,
-                },
-                Xv11Reading {
-                    distance_mm: 0x35,
-                    invalid: true,
-                    strength_warning: false,
-                    strength: 0,
-                },
-                Xv11Reading {
-                    distance_mm: 16_383,
-                    invalid: false,
-                    strength_warning: true,
-                    strength: 65_535,
-                },
-                Xv11Reading::default(),
-            ],
-        };
-        let mut b = [0u8; 22];
-        pkt.emit(&mut b).unwrap();
-        assert_eq!(&b[..4], &[0xFA, 0xA0 + 37, 0x00, 0x4B]);
-        assert_eq!(&b[4..8], &[0xD2, 0x04, 0xF4, 0x01]);
-        assert_eq!(b[9], 0x80);
-        assert_eq!(b[13], 0x7F);
-        assert_eq!(u16::from_le_bytes([b[20], b[21]]), checksum_ref(&b));
-        assert_eq!(Xv11Packet::parse(&b), Ok(pkt));
-        let p = pkt.point(1);
-        assert!(!p.valid);
-        assert_eq!(pkt.point(2).angle_cw_deg, 150.0);
-        assert!(!pkt.point(3).valid);
-    }
-
-    #[test]
-    fn decoder_resyncs_and_counts() {
-        let readings: [Xv11Reading; 360] =
-            core::array::from_fn(|a| Xv11Reading::from_range_m(0.2 + a as f32 * 0.01, 100));
-        let mut rev = vec![0u8; REVOLUTION_LEN];
-        encode_revolution(&readings, 300 * 64, &mut rev).unwrap();
-        let mut s = vec![0xFA, 0x00, 0x13];
-        s.extend_from_slice(&rev[..100]);
-        s.extend_from_slice(&rev[105..]); // packet 4 loses 5 bytes
-        let mut d = Xv11Decoder::new();
-        let mut pts = Vec::new();
-        d.feed(&s, |p| pts.push(p));
-        let st = d.stats();
-        assert_eq!(st.frames_ok, 89);
-        assert_eq!(st.bad_checksum, 1);
-        assert_eq!(pts.len(), 356);
-        assert!(pts.iter().all(|p| (p.angle_cw_deg as usize) / 4 != 4));
-        assert_eq!(
-            st.bytes as usize,
-            22 * st.frames_ok as usize + st.skipped_bytes as usize + d.buffered()
-        );
-        assert_eq!(d.last_speed_rpm_q6(), Some(19_200));
-    }
 }

@@ -33,12 +33,18 @@
 //! distance-field blob (`docs/blob-format.md`). It can be linked on its own or appended right
 //! after a blob in one file ([`FieldView::parse_prefix`](super::FieldView::parse_prefix) returns
 //! the bytes after the blob; [`FreeSpace::parse`] reads them).
+//!
+//! Files and layering: this module holds the format's field table (`field`, read by both
+//! [`FreeSpace::parse_prefix`] and [`emit_free_space`]), the parser and the queries;
+//! `emit.rs` the writer. It builds on `layout` (the CRC), `grid` (the grid check) and `view`
+//! (the grid of a [`FieldView`]); nothing below it imports it.
 
-use super::blob::CRC32;
-use super::grid::check_grid;
+use super::grid::{check_grid, from_grid_fault, GridFault};
+use super::layout::CRC32;
 use super::FieldView;
 use crate::gaussian::uniform_f32;
 use crate::pose::Pose;
+use crate::wire::{self, Field};
 use core::f32::consts::PI;
 use rand_core::Rng;
 
@@ -50,6 +56,72 @@ pub const FREE_SPACE_VERSION: u16 = 1;
 pub const FREE_SPACE_HEADER_LEN: usize = 48;
 /// Bytes per run.
 pub const FREE_SPACE_RUN_LEN: usize = 8;
+
+mod emit;
+#[cfg(test)]
+mod tests;
+
+pub use emit::{emit_free_space, free_space_len};
+
+/// Where each field of the section lies (offsets in bytes), all little-endian: the one table the
+/// parse and the emit side read.
+mod field {
+    use crate::wire::Field;
+
+    /// Magic, [`FREE_SPACE_MAGIC`](super::FREE_SPACE_MAGIC).
+    pub const MAGIC: Field = 0..4;
+    /// Format version, `u16`.
+    pub const VERSION: Field = 4..6;
+    /// Header length, `u16`.
+    pub const HEADER_LEN: Field = 6..8;
+    /// Width, cells, `u32`.
+    pub const WIDTH: Field = 8..12;
+    /// Height, cells, `u32`.
+    pub const HEIGHT: Field = 12..16;
+    /// Cell size, metres, `f32`.
+    pub const CELL_SIZE: Field = 16..20;
+    /// Origin x, metres, `f32`.
+    pub const ORIGIN_X: Field = 20..24;
+    /// Origin y, metres, `f32`.
+    pub const ORIGIN_Y: Field = 24..28;
+    /// Run count, `u32`.
+    pub const RUN_COUNT: Field = 28..32;
+    /// Free cell count, `u32`.
+    pub const FREE_COUNT: Field = 32..36;
+    /// Payload length, bytes, `u32`.
+    pub const PAYLOAD_LEN: Field = 36..40;
+    /// CRC-32 of the payload.
+    pub const PAYLOAD_CRC: Field = 40..44;
+    /// The bytes the header CRC covers.
+    pub const CHECKED: Field = 0..44;
+    /// CRC-32 of [`CHECKED`].
+    pub const HEADER_CRC: Field = 44..48;
+
+    /// One run, within the payload.
+    pub mod run {
+        use crate::wire::Field;
+
+        /// First cell, `iy·W + ix`, `u32`.
+        pub const FIRST: Field = 0..4;
+        /// Free cells in all earlier runs, `u32`.
+        pub const BEFORE: Field = 4..8;
+    }
+}
+
+// The table covers the header and a run exactly, field after field.
+const _: () = {
+    use field::*;
+    assert!(MAGIC.start == 0 && MAGIC.end == VERSION.start && VERSION.end == HEADER_LEN.start);
+    assert!(HEADER_LEN.end == WIDTH.start && WIDTH.end == HEIGHT.start);
+    assert!(HEIGHT.end == CELL_SIZE.start && CELL_SIZE.end == ORIGIN_X.start);
+    assert!(ORIGIN_X.end == ORIGIN_Y.start && ORIGIN_Y.end == RUN_COUNT.start);
+    assert!(RUN_COUNT.end == FREE_COUNT.start && FREE_COUNT.end == PAYLOAD_LEN.start);
+    assert!(PAYLOAD_LEN.end == PAYLOAD_CRC.start && PAYLOAD_CRC.end == HEADER_CRC.start);
+    assert!(CHECKED.start == 0 && CHECKED.end == HEADER_CRC.start);
+    assert!(HEADER_CRC.end == FREE_SPACE_HEADER_LEN);
+    assert!(run::FIRST.start == 0 && run::FIRST.end == run::BEFORE.start);
+    assert!(run::BEFORE.end == FREE_SPACE_RUN_LEN);
+};
 
 /// Errors parsing or writing a free-space section.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -120,6 +192,8 @@ impl core::fmt::Display for FreeSpaceError {
 
 impl core::error::Error for FreeSpaceError {}
 
+from_grid_fault!(FreeSpaceError);
+
 /// The grid a free-space section describes: the same numbers as a distance-field blob's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -176,12 +250,11 @@ pub struct FreeSpace<'a> {
     free_count: u32,
 }
 
-fn u32_at(bytes: &[u8], at: usize) -> u32 {
-    let mut w = [0u8; 4];
-    if let Some(s) = bytes.get(at..at + 4) {
-        w.copy_from_slice(s);
-    }
-    u32::from_le_bytes(w)
+/// Field `f` of run `i` of `runs` (0 past the end).
+#[inline]
+fn run_field(runs: &[u8], i: u32, f: Field) -> u32 {
+    let at = i as usize * FREE_SPACE_RUN_LEN;
+    wire::get_u32(runs, at + f.start..at + f.end)
 }
 
 impl<'a> FreeSpace<'a> {
@@ -208,34 +281,34 @@ impl<'a> FreeSpace<'a> {
         let head = bytes
             .get(..FREE_SPACE_HEADER_LEN)
             .ok_or(FreeSpaceError::Truncated)?;
-        if head.get(..4) != Some(&FREE_SPACE_MAGIC[..]) {
+        if head.get(field::MAGIC) != Some(&FREE_SPACE_MAGIC[..]) {
             return Err(FreeSpaceError::BadMagic);
         }
-        let word = u32_at(head, 4);
-        let version = (word & 0xFFFF) as u16;
+        let version = wire::get_u16(head, field::VERSION);
         if version != FREE_SPACE_VERSION {
             return Err(FreeSpaceError::UnsupportedVersion(version));
         }
-        if (word >> 16) as usize != FREE_SPACE_HEADER_LEN {
+        if usize::from(wire::get_u16(head, field::HEADER_LEN)) != FREE_SPACE_HEADER_LEN {
             return Err(FreeSpaceError::BadHeaderLength);
         }
-        if CRC32.checksum(head.get(..44).unwrap_or(&[])) != u32_at(head, 44) {
+        let header_crc = wire::get_u32(head, field::HEADER_CRC);
+        if CRC32.checksum(head.get(field::CHECKED).unwrap_or(&[])) != header_crc {
             return Err(FreeSpaceError::HeaderChecksum);
         }
         let grid = FreeSpaceGrid {
-            width: u32_at(head, 8),
-            height: u32_at(head, 12),
-            cell_size_m: f32::from_bits(u32_at(head, 16)),
-            origin_x_m: f32::from_bits(u32_at(head, 20)),
-            origin_y_m: f32::from_bits(u32_at(head, 24)),
+            width: wire::get_u32(head, field::WIDTH),
+            height: wire::get_u32(head, field::HEIGHT),
+            cell_size_m: wire::get_f32(head, field::CELL_SIZE),
+            origin_x_m: wire::get_f32(head, field::ORIGIN_X),
+            origin_y_m: wire::get_f32(head, field::ORIGIN_Y),
         };
         let cells = grid.validate()?;
-        let run_count = u32_at(head, 28);
-        let free_count = u32_at(head, 32);
+        let run_count = wire::get_u32(head, field::RUN_COUNT);
+        let free_count = wire::get_u32(head, field::FREE_COUNT);
         if run_count == 0 || free_count == 0 {
             return Err(FreeSpaceError::NoFreeCell);
         }
-        let payload_len = u32_at(head, 36) as usize;
+        let payload_len = wire::get_u32(head, field::PAYLOAD_LEN) as usize;
         let expected = (run_count as usize)
             .checked_mul(FREE_SPACE_RUN_LEN)
             .ok_or(FreeSpaceError::PayloadLengthMismatch)?;
@@ -248,17 +321,16 @@ impl<'a> FreeSpace<'a> {
         let runs = bytes
             .get(FREE_SPACE_HEADER_LEN..end)
             .ok_or(FreeSpaceError::Truncated)?;
-        if CRC32.checksum(runs) != u32_at(head, 40) {
+        if CRC32.checksum(runs) != wire::get_u32(head, field::PAYLOAD_CRC) {
             return Err(FreeSpaceError::PayloadChecksum);
         }
         // Every run: non-empty, after the previous one, inside its row.
         let mut prev_end = 0u64;
         for i in 0..run_count {
-            let at = i as usize * FREE_SPACE_RUN_LEN;
-            let first = u32_at(runs, at);
-            let before = u32_at(runs, at + 4);
+            let first = run_field(runs, i, field::run::FIRST);
+            let before = run_field(runs, i, field::run::BEFORE);
             let next_before = if i + 1 < run_count {
-                u32_at(runs, at + 4 + FREE_SPACE_RUN_LEN)
+                run_field(runs, i + 1, field::run::BEFORE)
             } else {
                 free_count
             };
@@ -319,8 +391,10 @@ impl<'a> FreeSpace<'a> {
     }
 
     fn run(&self, i: u32) -> (u32, u32) {
-        let at = i as usize * FREE_SPACE_RUN_LEN;
-        (u32_at(self.runs, at), u32_at(self.runs, at + 4))
+        (
+            run_field(self.runs, i, field::run::FIRST),
+            run_field(self.runs, i, field::run::BEFORE),
+        )
     }
 
     /// The `k`-th free cell `(ix, iy)` in row-major order (row 0 = lowest y), `k < F`; `k ≥ F`
@@ -398,241 +472,5 @@ impl<'a> FreeSpace<'a> {
             y_m: self.grid.origin_y_m + (iy as f32 + fy) * s,
             theta_rad: PI * (2.0 * ft - 1.0),
         }
-    }
-}
-
-/// Counts the runs of free cells (per row) in `free` (`W·H` flags, row-major, row 0 = lowest y)
-/// and returns the section length in bytes.
-///
-/// # Errors
-/// Grid errors as [`FreeSpaceGrid::validate`], [`FreeSpaceError::CellCountMismatch`],
-/// [`FreeSpaceError::NoFreeCell`], [`FreeSpaceError::TooLarge`] when the section would exceed
-/// `u32` lengths.
-pub fn free_space_len(grid: &FreeSpaceGrid, free: &[bool]) -> Result<usize, FreeSpaceError> {
-    let (runs, _) = count_runs(grid, free)?;
-    let payload = (runs as usize)
-        .checked_mul(FREE_SPACE_RUN_LEN)
-        .ok_or(FreeSpaceError::TooLarge)?;
-    u32::try_from(payload).map_err(|_| FreeSpaceError::TooLarge)?;
-    payload
-        .checked_add(FREE_SPACE_HEADER_LEN)
-        .ok_or(FreeSpaceError::TooLarge)
-}
-
-fn count_runs(grid: &FreeSpaceGrid, free: &[bool]) -> Result<(u32, u32), FreeSpaceError> {
-    let cells = grid.validate()?;
-    if free.len() != cells as usize {
-        return Err(FreeSpaceError::CellCountMismatch);
-    }
-    let (mut runs, mut count) = (0u32, 0u32);
-    for row in free.chunks(grid.width as usize) {
-        let mut prev = false;
-        for &f in row {
-            if f {
-                count += 1;
-                if !prev {
-                    runs += 1;
-                }
-            }
-            prev = f;
-        }
-    }
-    if count == 0 {
-        return Err(FreeSpaceError::NoFreeCell);
-    }
-    Ok((runs, count))
-}
-
-/// Writes the free-space section of `free` (`W·H` flags, row-major, row 0 = lowest y, `true` =
-/// known free) into `out`; returns the bytes written ([`free_space_len`]).
-///
-/// # Errors
-/// As [`free_space_len`], and [`FreeSpaceError::BufferTooSmall`]. Nothing is written on error.
-pub fn emit_free_space(
-    grid: &FreeSpaceGrid,
-    free: &[bool],
-    out: &mut [u8],
-) -> Result<usize, FreeSpaceError> {
-    let total = free_space_len(grid, free)?;
-    let (runs, count) = count_runs(grid, free)?;
-    let dst = out.get_mut(..total).ok_or(FreeSpaceError::BufferTooSmall)?;
-    let (head, payload) = dst.split_at_mut(FREE_SPACE_HEADER_LEN);
-    let mut slots = payload.chunks_exact_mut(FREE_SPACE_RUN_LEN);
-    let mut before = 0u32;
-    for (iy, row) in free.chunks(grid.width as usize).enumerate() {
-        let mut prev = false;
-        for (ix, &f) in row.iter().enumerate() {
-            if f && !prev {
-                if let Some(slot) = slots.next() {
-                    let first = iy as u32 * grid.width + ix as u32;
-                    let mut run = [0u8; FREE_SPACE_RUN_LEN];
-                    run[..4].copy_from_slice(&first.to_le_bytes());
-                    run[4..].copy_from_slice(&before.to_le_bytes());
-                    slot.copy_from_slice(&run);
-                }
-            }
-            before += u32::from(f);
-            prev = f;
-        }
-    }
-    let fields: [(usize, [u8; 4]); 11] = [
-        (0, FREE_SPACE_MAGIC),
-        (
-            4,
-            (u32::from(FREE_SPACE_VERSION) | ((FREE_SPACE_HEADER_LEN as u32) << 16)).to_le_bytes(),
-        ),
-        (8, grid.width.to_le_bytes()),
-        (12, grid.height.to_le_bytes()),
-        (16, grid.cell_size_m.to_le_bytes()),
-        (20, grid.origin_x_m.to_le_bytes()),
-        (24, grid.origin_y_m.to_le_bytes()),
-        (28, runs.to_le_bytes()),
-        (32, count.to_le_bytes()),
-        (36, (runs * FREE_SPACE_RUN_LEN as u32).to_le_bytes()),
-        (40, CRC32.checksum(payload).to_le_bytes()),
-    ];
-    for (at, b) in fields {
-        if let Some(d) = head.get_mut(at..at + 4) {
-            d.copy_from_slice(&b);
-        }
-    }
-    let crc = CRC32.checksum(head.get(..44).unwrap_or(&[]));
-    if let Some(d) = head.get_mut(44..48) {
-        d.copy_from_slice(&crc.to_le_bytes());
-    }
-    Ok(total)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mcl::SplitMix64;
-
-    fn grid(w: u32, h: u32) -> FreeSpaceGrid {
-        FreeSpaceGrid {
-            width: w,
-            height: h,
-            cell_size_m: 0.5,
-            origin_x_m: -1.0,
-            origin_y_m: 2.0,
-        }
-    }
-
-    /// 4 × 3, free cells marked `#` (row 0 at the bottom):
-    /// ```text
-    /// row 2: # # . #
-    /// row 1: . . . .
-    /// row 0: . # # .
-    /// ```
-    fn sample_flags() -> Vec<bool> {
-        let rows = [".##.", "....", "##.#"];
-        rows.iter()
-            .flat_map(|r| r.chars().map(|c| c == '#'))
-            .collect()
-    }
-
-    fn emitted(g: &FreeSpaceGrid, f: &[bool]) -> Vec<u8> {
-        let n = free_space_len(g, f).unwrap();
-        let mut out = vec![0u8; n];
-        assert_eq!(emit_free_space(g, f, &mut out).unwrap(), n);
-        out
-    }
-
-    #[test]
-    fn round_trip_and_layout() {
-        let g = grid(4, 3);
-        let f = sample_flags();
-        let bytes = emitted(&g, &f);
-        // Three runs: cell 1 (len 2), cell 8 (len 2), cell 11 (len 1); 5 free cells.
-        assert_eq!(bytes.len(), 48 + 3 * 8);
-        assert_eq!(&bytes[..4], b"BFFS");
-        assert_eq!(u32_at(&bytes, 28), 3);
-        assert_eq!(u32_at(&bytes, 32), 5);
-        let runs: Vec<u32> = (0..6).map(|i| u32_at(&bytes, 48 + 4 * i)).collect();
-        assert_eq!(runs, [1, 0, 8, 2, 11, 4]);
-        let fs = FreeSpace::parse(&bytes).unwrap();
-        assert_eq!(fs.free_count(), 5);
-        let cells: Vec<_> = (0..5).map(|k| fs.nth_free_cell(k)).collect();
-        assert_eq!(cells, [(1, 0), (2, 0), (0, 2), (1, 2), (3, 2)]);
-        for iy in 0..3u32 {
-            for ix in 0..4u32 {
-                let x = -1.0 + (ix as f32 + 0.5) * 0.5;
-                let y = 2.0 + (iy as f32 + 0.5) * 0.5;
-                assert_eq!(fs.is_free(x, y), f[(iy * 4 + ix) as usize], "{ix},{iy}");
-            }
-        }
-        assert!(!fs.is_free(f32::NAN, 2.1));
-        assert!(!fs.is_free(-1.1, 2.1));
-    }
-
-    #[test]
-    fn samples_are_uniform_over_free_cells() {
-        let g = grid(4, 3);
-        let f = sample_flags();
-        let bytes = emitted(&g, &f);
-        let fs = FreeSpace::parse(&bytes).unwrap();
-        let mut rng = SplitMix64::new(3);
-        let mut hits = [0u32; 12];
-        let n = 50_000;
-        for _ in 0..n {
-            let p = fs.sample_pose(&mut rng);
-            assert!(fs.is_free(p.x_m, p.y_m));
-            assert!((-PI..PI).contains(&p.theta_rad));
-            let ix = ((p.x_m + 1.0) / 0.5) as usize;
-            let iy = ((p.y_m - 2.0) / 0.5) as usize;
-            hits[iy * 4 + ix] += 1;
-        }
-        for (i, &h) in hits.iter().enumerate() {
-            if f[i] {
-                // Expected n/5 = 10000, σ ≈ 89: 5σ.
-                assert!((h as i32 - 10_000).abs() < 450, "cell {i}: {h}");
-            } else {
-                assert_eq!(h, 0);
-            }
-        }
-    }
-
-    #[test]
-    fn every_truncation_and_bit_flip_is_a_typed_error() {
-        let g = grid(4, 3);
-        let bytes = emitted(&g, &sample_flags());
-        for n in 0..bytes.len() {
-            assert!(FreeSpace::parse(&bytes[..n]).is_err(), "prefix {n}");
-        }
-        for i in 0..bytes.len() * 8 {
-            let mut b = bytes.clone();
-            b[i / 8] ^= 1 << (i % 8);
-            assert!(FreeSpace::parse(&b).is_err(), "bit {i}");
-        }
-        let mut long = bytes.clone();
-        long.push(0);
-        assert_eq!(
-            FreeSpace::parse(&long).err(),
-            Some(FreeSpaceError::TrailingBytes)
-        );
-        let (_, rest) = FreeSpace::parse_prefix(&long).unwrap();
-        assert_eq!(rest, [0]);
-    }
-
-    #[test]
-    fn writer_errors() {
-        let g = grid(4, 3);
-        assert_eq!(
-            free_space_len(&g, &[false; 12]),
-            Err(FreeSpaceError::NoFreeCell)
-        );
-        assert_eq!(
-            free_space_len(&g, &[true; 11]),
-            Err(FreeSpaceError::CellCountMismatch)
-        );
-        let mut small = [0u8; 50];
-        assert_eq!(
-            emit_free_space(&g, &sample_flags(), &mut small),
-            Err(FreeSpaceError::BufferTooSmall)
-        );
-        assert_eq!(
-            free_space_len(&grid(0, 3), &[]),
-            Err(FreeSpaceError::ZeroSize)
-        );
     }
 }
