@@ -187,6 +187,11 @@ impl Encoder {
         Self { next_seq: 0 }
     }
 
+    /// An encoder whose first frame has sequence number `first`.
+    pub const fn starting_at(first: u16) -> Self {
+        Self { next_seq: first }
+    }
+
     /// The sequence number the next frame will carry.
     pub const fn next_seq(&self) -> u16 {
         self.next_seq
