@@ -11,6 +11,8 @@
 //!   [`SensorModel`](crate::SensorModel) or a prepared tempered scan, resampling when the
 //!   effective sample size drops, augmented-MCL recovery (Table 8.3) from a
 //!   [`FreeSpace`](crate::field::FreeSpace) section, uniform and Gaussian initialization.
+//! - [`odometry`]: differential-drive odometry from encoder ticks ([`odometry::DiffDrive`]),
+//!   exact arc integration, wrapping counters.
 //! - [`rng`]: [`SplitMix64`], a seeded generator the host and the device run identically.
 //!
 //! Memory: 18 bytes per particle of capacity (pose 12, weight 4, resampling count 2) in
@@ -23,6 +25,7 @@ mod fast;
 pub mod filter;
 pub mod motion;
 pub mod normal;
+pub mod odometry;
 pub mod resample;
 pub mod rng;
 
