@@ -17,6 +17,7 @@ use crate::lidar::rplidar::RplidarError;
 use crate::lidar::xv11::Xv11Error;
 use crate::lidar::ydlidar::YdlidarError;
 use crate::lidar::EncodeError;
+use crate::link::LinkError;
 use crate::mcl::{MclError, MotionError};
 use crate::raycast::RayCastError;
 use crate::scan::ScanError;
@@ -79,6 +80,8 @@ pub enum Error {
     Ydlidar(YdlidarError),
     /// A scan assembler could not be set up ([`crate::lidar::ScanAssembler`]).
     Assembler(AssemblerError),
+    /// A frame of the device link was refused or could not be written ([`crate::link`]).
+    Link(LinkError),
     /// The fixed-point path was refused ([`crate::fixed_point`]).
     #[cfg(feature = "fixed")]
     Fixed(crate::fixed_point::FixedError),
@@ -118,6 +121,7 @@ impl core::fmt::Display for Error {
             Self::Xv11(e) => write!(f, "xv11: {e}"),
             Self::Ydlidar(e) => write!(f, "ydlidar: {e}"),
             Self::Assembler(e) => write!(f, "scan assembler: {e}"),
+            Self::Link(e) => write!(f, "link: {e}"),
             #[cfg(feature = "fixed")]
             Self::Fixed(e) => write!(f, "fixed point: {e}"),
             #[cfg(feature = "hal")]
@@ -156,6 +160,7 @@ impl core::error::Error for Error {
             Self::Xv11(e) => e,
             Self::Ydlidar(e) => e,
             Self::Assembler(e) => e,
+            Self::Link(e) => e,
             #[cfg(feature = "fixed")]
             Self::Fixed(e) => e,
             #[cfg(feature = "hal")]
@@ -206,6 +211,7 @@ from_error! {
     Xv11Error => Xv11,
     YdlidarError => Ydlidar,
     AssemblerError => Assembler,
+    LinkError => Link,
     #[cfg(feature = "fixed")] crate::fixed_point::FixedError => Fixed,
     #[cfg(feature = "hal")] crate::sonar::driver::ConfigError => SonarConfig,
 }

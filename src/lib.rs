@@ -187,6 +187,7 @@ pub mod gaussian;
 pub mod intrinsics;
 pub mod landmark;
 pub mod lidar;
+pub mod link;
 pub mod math;
 pub mod mcl;
 pub mod model;
@@ -215,6 +216,7 @@ pub use intrinsics::{BeamIntrinsics, IntrinsicsError, Param};
 pub use landmark::{
     Feature, FeatureNoise, IntersectionError, Landmark, LandmarkError, TwoFeaturePoses,
 };
+pub use link::LinkError;
 pub use model::{SensorModel, Stride};
 pub use pose::{wrap_angle, Pose, SensorMount};
 pub use raycast::{CastTrace, RayCastError, RayCaster};

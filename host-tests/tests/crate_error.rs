@@ -123,6 +123,13 @@ fn every_other_error_type_converts() {
     assert_eq!(check_wrapped(e, "localizer"), Error::Mcl(e));
     let e = beamfield::mcl::MotionError::NonFiniteOdometry;
     assert_eq!(check_wrapped(e, "odometry"), Error::Motion(e));
+    let e = beamfield::mcl::odometry::DiffDrive::new(
+        beamfield::mcl::odometry::DiffDriveGeometry::new(0.05, 0.05, 0.0, 4096, 0.5),
+    )
+    .expect_err("a zero wheelbase");
+    assert_eq!(check_wrapped(e, "odometry"), Error::Motion(e));
+    let e = beamfield::link::decode(&[0x55; 10]).expect_err("garbage");
+    assert_eq!(check_wrapped(e, "link"), Error::Link(e));
     let e = beamfield::lidar::EncodeError::BadSampleCount(7);
     assert_eq!(check_wrapped(e, "lidar encoder"), Error::LidarEncode(e));
     let e = beamfield::lidar::ld06::Ld06Error::BadHeader;

@@ -11,6 +11,8 @@
 //!   [`SensorModel`](crate::SensorModel) or a prepared tempered scan, resampling when the
 //!   effective sample size drops, augmented-MCL recovery (Table 8.3) from a
 //!   [`FreeSpace`](crate::field::FreeSpace) section, uniform and Gaussian initialization.
+//! - [`odometry`]: differential-drive odometry from encoder ticks ([`odometry::DiffDrive`]),
+//!   exact arc integration, wrapping counters.
 //! - [`rng`]: [`SplitMix64`] (the filter's) and [`XorShift64`] (the randomized checks'), seeded
 //!   generators the host and the device run identically.
 //!
@@ -23,6 +25,7 @@ pub mod estimate;
 pub mod filter;
 pub mod motion;
 pub mod normal;
+pub mod odometry;
 pub mod resample;
 pub mod rng;
 

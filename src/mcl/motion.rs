@@ -44,6 +44,11 @@ pub enum MotionError {
     BadAlpha(u8),
     /// An odometry pose or step has a NaN or infinite coordinate.
     NonFiniteOdometry,
+    /// A differential drive's geometry was refused ([`super::odometry::DiffDrive::new`]).
+    BadDiffDrive(super::odometry::DiffDriveParam),
+    /// A wheel travelled more than the differential drive's maximum in one step
+    /// ([`super::odometry::DiffDrive::step`]).
+    StepTooLong,
 }
 
 impl core::fmt::Display for MotionError {
@@ -51,6 +56,8 @@ impl core::fmt::Display for MotionError {
         match self {
             Self::BadAlpha(i) => write!(f, "odom_alpha{i} must be finite and >= 0"),
             Self::NonFiniteOdometry => f.write_str("odometry is not finite"),
+            Self::BadDiffDrive(p) => write!(f, "differential drive: {p}"),
+            Self::StepTooLong => f.write_str("wheel travel over the maximum per step"),
         }
     }
 }
