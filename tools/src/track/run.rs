@@ -246,7 +246,7 @@ fn amcl_cube(
 /// [`OdometryNoise::sigmas`], drawn by [`odometry_sample`] from [`SplitMix64`] seeded
 /// `seed ^ ODOMETRY_SEED_XOR`) and chained. One pose per logged pose
 /// (none for none). The filter sees the steps between consecutive odometry poses; the firmware's
-/// track asset (`firmware/assets/track.rs`) is written from the same function.
+/// track asset (`fixtures/assets/track.rs`) is written from the same function.
 ///
 /// # Errors
 /// [`TrackError::Usage`] for a logged pose that is not finite.
