@@ -193,6 +193,7 @@ pub mod mcl;
 pub mod model;
 pub mod pose;
 pub mod raycast;
+pub mod robot;
 pub mod scan;
 pub mod sonar;
 pub mod tempered;

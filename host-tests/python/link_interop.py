@@ -137,7 +137,7 @@ def check(t, v, fmt):
         if not (math.isfinite(v[16]) and 0 <= v[16] <= 1):
             raise Refused("out_of_range", at[16])
     elif t == 0x83:
-        if not 1 <= v[0] <= 6:
+        if not 1 <= v[0] <= 7:
             raise Refused("out_of_range", 0)
 
 

@@ -45,7 +45,7 @@ fn message() -> impl Strategy<Value = Message> {
         QualityState::Uncertain,
         QualityState::Lost,
     ]);
-    let code = (1u8..=6).prop_map(|c| ErrorCode::from_u8(c).unwrap());
+    let code = (1u8..=7).prop_map(|c| ErrorCode::from_u8(c).unwrap());
     prop_oneof![
         (any::<u64>(), pose()).prop_map(|(timestamp_us, pose)| Message::WheelOdometry(
             WheelOdometry { timestamp_us, pose }

@@ -264,10 +264,13 @@ pub enum ErrorCode {
     /// 6: the message needs an initialized filter (e.g. `RequestNoMotionUpdate` before any
     /// `SetInitialPose` or `StartGlobalLocalization`); detail: 0.
     NotInitialized = 6,
+    /// 7: a timestamped message (odometry) not later than the last one accepted: time went
+    /// backwards or the message was replayed; detail: 0.
+    OutOfOrder = 7,
 }
 
 impl ErrorCode {
-    /// The code of a byte, `None` for 0 and 7 to 255.
+    /// The code of a byte, `None` for 0 and 8 to 255.
     pub const fn from_u8(b: u8) -> Option<Self> {
         match b {
             1 => Some(Self::WrongVersion),
@@ -276,6 +279,7 @@ impl ErrorCode {
             4 => Some(Self::ValueOutOfRange),
             5 => Some(Self::Refused),
             6 => Some(Self::NotInitialized),
+            7 => Some(Self::OutOfOrder),
             _ => None,
         }
     }

@@ -205,6 +205,16 @@ impl<'p, const N: usize> Mcl<'p, N> {
         &self.config
     }
 
+    /// Replaces the configuration (odometry noise, resampling threshold, recovery, retry) from
+    /// the next [`Mcl::predict`] or update on; the particles and their weights stay as they are.
+    /// The recovery averages restart, as after an initialization.
+    pub fn set_config(&mut self, config: MclConfig) {
+        self.config = config;
+        self.ln_w_slow = f32::NEG_INFINITY;
+        self.ln_w_fast = f32::NEG_INFINITY;
+        self.ln_level = f32::NEG_INFINITY;
+    }
+
     /// Moves every particle by a sample of the odometry motion model (Table 5.6; the model of
     /// [`OdometryNoise::sample`](super::OdometryNoise::sample)), in particle order. A step of
     /// exactly zero (the robot did not move) leaves the particles alone and draws nothing, as

@@ -1,0 +1,840 @@
+//! The base controller's localization loop: the LiDAR's bytes and the computer's link bytes in,
+//! estimates, heartbeats and typed errors out. `no_std`, no allocation, no panic on any input;
+//! the firmware program `firmware/src/bin/robot.rs` runs it behind three USARTs and
+//! `cargo xtask robot` replays the same bytes through it on the host, bit for bit
+//! (`docs/robot.md`).
+//!
+//! [`Robot::poll`] does a bounded amount of work per call and pulls bytes from two
+//! [`ByteSource`]s:
+//!
+//! 1. **Link** (odometry and commands, the protocol of [`crate::link`]): frames are decoded as
+//!    long as the odometry window ([`window::WINDOW`] samples) and the command queue
+//!    ([`COMMANDS`]) have room — a sender that runs ahead is held back, nothing is dropped.
+//!    Odometry ([`link::WheelOdometry`], or [`link::WheelTicks`] through the crate's
+//!    [`DiffDrive`] model) must come with strictly increasing timestamps and steps a robot can
+//!    make ([`RobotConfig::max_speed_m_per_s`], [`RobotConfig::max_turn_rad_per_s`]); anything
+//!    else is refused with an [`link::ErrorReport`] and leaves the state unchanged. Commands are
+//!    checked when they arrive (and refused then) and carried out at their place in the stream:
+//!    before the first revolution that ends after the last odometry sample received before them.
+//! 2. **LiDAR** (LD06 frames): decoded and assembled into revolutions on the layout. The
+//!    revolution's time is the middle of its first and last frames' timestamps, on the sensor's
+//!    clock unwrapped into µs ([`ScanClock`]). **The sensor's clock is the device's clock**:
+//!    odometry timestamps must be on it (a sender learns it from the heartbeats' timestamps).
+//! 3. **Update**: a revolution is processed once the odometry reaches its time (the pose is
+//!    interpolated there, [`OdometryWindow::at`]) — or, when the next revolution is complete
+//!    first, with the odometry it has, flagged [`EstimateFlags::ODOMETRY_STALE`] and counted as
+//!    late. The filter predicts with the odometry step since the last update and updates with the
+//!    tempered likelihood field; an [`link::Estimate`] goes out for every update that succeeded,
+//!    stamped with the revolution's time, so a pose is never sent twice or late under a new time.
+//!    A heartbeat follows every [`RobotConfig::heartbeat_every`] revolutions.
+//!
+//! Nothing depends on how the bytes are split between calls, as long as the odometry that
+//! reaches a revolution's time arrives before the next revolution is complete: the device's
+//! output is then a function of the two byte streams alone, which is what lets the host
+//! recompute it.
+
+mod clock;
+mod io;
+#[cfg(test)]
+mod tests;
+pub mod window;
+
+pub use clock::ScanClock;
+pub use io::{ByteSource, Seed, Sink, SliceSource};
+pub use window::{OdometryWindow, Sample};
+
+use crate::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
+use crate::lidar::ld06::{Ld06Decoder, TIMESTAMP_WRAP_MS};
+use crate::lidar::{AssemblerConfig, AssemblerStats, DecoderStats, ScanAssembler};
+use crate::link::{
+    self, ErrorCode, ErrorReport, EstimateFlags, Frame, Heartbeat, LinkError, LinkStats, Message,
+    MessageType, Quality, SetParameters, MAX_WIRE_LEN,
+};
+use crate::math;
+use crate::mcl::odometry::{DiffDrive, DiffDriveGeometry};
+use crate::mcl::{Mcl, MclConfig, OdometryNoise, OdometryStep, Particles, SplitMix64};
+use crate::pose::{wrap_angle, Pose};
+use crate::scan::{BeamLayout, Scan};
+use crate::tempered::Tempered;
+use crate::Error;
+use heapless::Deque;
+
+/// Commands queued until their place in the stream is reached.
+pub const COMMANDS: usize = 8;
+
+/// What the application is set up with. Units: metres, radians, seconds, microseconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RobotConfig {
+    /// Particles in use (at most the storage's capacity `N`).
+    pub particles: usize,
+    /// Likelihood field: weight of the Gaussian hit component.
+    pub z_hit: f32,
+    /// Likelihood field: weight of the uniform random component.
+    pub z_rand: f32,
+    /// Likelihood field: standard deviation of a hit, m.
+    pub sigma_hit_m: f32,
+    /// The sensor's largest range, m (readings at or beyond it are not scored).
+    pub max_range_m: f32,
+    /// Tempering κ: the summed log-likelihood of a scan is divided by it.
+    pub kappa: f32,
+    /// The motion model's odometry noise (AMCL's α1 … α4).
+    pub odom_noise: OdometryNoise,
+    /// Resample when the effective sample size falls below this fraction of the particles.
+    pub resample_ess_fraction: f32,
+    /// The smallest standard deviation used when the cloud is drawn around a pose, m and rad
+    /// (an `initialpose` with a smaller covariance is widened to it).
+    pub min_init_sigma_xy_m: f32,
+    /// See [`RobotConfig::min_init_sigma_xy_m`], rad.
+    pub min_init_sigma_theta_rad: f32,
+    /// Wheel geometry for [`link::WheelTicks`]; without it tick messages are refused.
+    pub wheels: Option<DiffDriveGeometry>,
+    /// Odometry faster than this between two samples is refused, m/s.
+    pub max_speed_m_per_s: f32,
+    /// Odometry turning faster than this between two samples is refused, rad/s.
+    pub max_turn_rad_per_s: f32,
+    /// Interpolating across a longer gap between two odometry samples flags the estimate
+    /// [`EstimateFlags::ODOMETRY_STALE`], µs.
+    pub max_odometry_gap_us: u64,
+    /// Skip the update until the odometry has moved this far since the last one (AMCL's
+    /// `update_min_d`), m; 0 updates at every revolution.
+    pub update_min_d_m: f32,
+    /// See [`RobotConfig::update_min_d_m`]: AMCL's `update_min_a`, rad.
+    pub update_min_a_rad: f32,
+    /// A heartbeat after every this many revolutions (0: none from [`Robot::poll`]).
+    pub heartbeat_every: u32,
+    /// Seed of the filter's random generator.
+    pub seed: u64,
+}
+
+impl RobotConfig {
+    /// The defaults of a small indoor robot with an LD06: 500 particles, the likelihood field of
+    /// the Intel lab demo (z_hit 0.95, z_rand 0.05, σ_hit 5 cm, κ 8.25), odometry noise α 0.005,
+    /// resampling below half the particles, at most 2 m/s and 4 rad/s, 100 ms gaps, an update at
+    /// every revolution and a heartbeat every 10.
+    ///
+    /// # Errors
+    /// [`Error::Motion`] if `max_range_m` is not finite (it checks nothing else: the checks are
+    /// in [`Robot::new`]).
+    pub fn new(max_range_m: f32) -> Result<Self, Error> {
+        Ok(Self {
+            particles: 500,
+            z_hit: 0.95,
+            z_rand: 0.05,
+            sigma_hit_m: 0.05,
+            max_range_m,
+            kappa: 8.25,
+            odom_noise: OdometryNoise::uniform(0.005)?,
+            resample_ess_fraction: 0.5,
+            min_init_sigma_xy_m: 0.01,
+            min_init_sigma_theta_rad: 0.005,
+            wheels: None,
+            max_speed_m_per_s: 2.0,
+            max_turn_rad_per_s: 4.0,
+            max_odometry_gap_us: 100_000,
+            update_min_d_m: 0.0,
+            update_min_a_rad: 0.0,
+            heartbeat_every: 10,
+            seed: 1,
+        })
+    }
+}
+
+/// What the application counted since it started (all wrap at 2³²).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RobotCounters {
+    /// Revolutions assembled.
+    pub revolutions: u32,
+    /// Filter updates that succeeded (one estimate each).
+    pub updates: u32,
+    /// Revolutions not used for an update: filter not initialized, too little motion, no
+    /// valid beam, every particle impossible.
+    pub skipped: u32,
+    /// Revolutions processed before the odometry reached their time.
+    pub late_odometry: u32,
+    /// Estimates flagged [`EstimateFlags::ODOMETRY_STALE`] (late, gap, or no odometry).
+    pub stale_odometry: u32,
+    /// Odometry messages accepted.
+    pub odometry: u32,
+    /// Commands carried out.
+    pub commands: u32,
+    /// Frames refused after their CRC passed (an error report went out for each).
+    pub refused: u32,
+    /// Bytes or messages dropped outside the application (a full receive ring), as reported by
+    /// [`Robot::add_drops`].
+    pub drops: u32,
+    /// Frames sent.
+    pub frames_sent: u32,
+    /// Estimates or heartbeats that could not be encoded (never sent).
+    pub encode_failures: u32,
+}
+
+/// What one [`Robot::poll`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Progress {
+    /// Link bytes taken.
+    pub link_bytes: u32,
+    /// LiDAR bytes taken.
+    pub lidar_bytes: u32,
+    /// Whether a revolution was processed.
+    pub processed: bool,
+}
+
+impl Progress {
+    /// Whether nothing happened (nothing to read, nothing ready).
+    pub fn is_idle(&self) -> bool {
+        self.link_bytes == 0 && self.lidar_bytes == 0 && !self.processed
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Command {
+    Initial(link::SetInitialPose),
+    Global,
+    NoMotion,
+    Parameters(SetParameters),
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Queued {
+    /// Carried out before the first revolution whose time is at or after this, µs.
+    at_us: u64,
+    command: Command,
+}
+
+#[derive(Clone, Debug)]
+struct Revolution<const S: usize> {
+    scan: Scan<S>,
+    t_us: u64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum OdometrySource {
+    Poses,
+    Ticks,
+}
+
+/// The application: decoder, assembler, odometry window, filter and link in one value, for `N`
+/// particles of capacity and scans of `S` beams. See the [module docs](self).
+pub struct Robot<'a, const N: usize, const S: usize> {
+    config: RobotConfig,
+    layout: BeamLayout<S>,
+    model: Tempered<LikelihoodField<'a>>,
+    free: Option<FreeSpace<'a>>,
+    mcl: Mcl<'a, N>,
+    rng: SplitMix64,
+    lidar: Ld06Decoder,
+    assembler: ScanAssembler<S>,
+    clock: ScanClock,
+    link: link::Decoder,
+    encoder: link::Encoder,
+    wheels: Option<DiffDrive>,
+    source: Option<OdometrySource>,
+    window: OdometryWindow,
+    stream_time_us: u64,
+    commands: Deque<Queued, COMMANDS>,
+    pending: Option<Revolution<S>>,
+    next: Option<Revolution<S>>,
+    last_odom: Option<Pose>,
+    initialized: bool,
+    global: bool,
+    force_update: bool,
+    processed_us: u64,
+    counters: RobotCounters,
+}
+
+impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
+    /// Sets up the application over the distance field `view` (and its free space, needed for
+    /// global localization), the sensor's `layout` and `config`. With a `seed` (the estimate
+    /// saved at the last run, [`Sink::save`]) the filter starts around it; without, it waits for
+    /// a `SetInitialPose` or `StartGlobalLocalization`.
+    ///
+    /// # Errors
+    /// The first parameter refused: [`Error::Likelihood`], [`Error::Temper`], [`Error::Mcl`]
+    /// (particles 0 or above `N`, resampling fraction), [`Error::Motion`] (wheel geometry),
+    /// [`Error::Assembler`].
+    pub fn new(
+        store: &'a mut Particles<N>,
+        view: FieldView<'a>,
+        free: Option<FreeSpace<'a>>,
+        layout: BeamLayout<S>,
+        config: RobotConfig,
+        seed: Option<Seed>,
+    ) -> Result<Self, Error> {
+        let params = LikelihoodParams::new(
+            config.z_hit,
+            config.z_rand,
+            config.sigma_hit_m,
+            config.max_range_m,
+        )?;
+        let model = Tempered::new(LikelihoodField::new(view, params), config.kappa, 1)?;
+        if config.particles == 0 || config.particles > N {
+            return Err(Error::Mcl(crate::mcl::MclError::TooManyParticles));
+        }
+        let mcl_config = MclConfig::new(config.odom_noise, config.resample_ess_fraction, 0.0, 0.0)?;
+        let mcl = Mcl::new(store, mcl_config)?;
+        let wheels = match config.wheels {
+            Some(g) => Some(DiffDrive::new(g)?),
+            None => None,
+        };
+        let mut assembler_config = AssemblerConfig::for_layout(&layout);
+        assembler_config.max_range_m = config.max_range_m;
+        let assembler = ScanAssembler::new(&layout, assembler_config)?;
+        let mut robot = Self {
+            config,
+            layout,
+            model,
+            free,
+            mcl,
+            rng: SplitMix64::new(config.seed),
+            lidar: Ld06Decoder::new(),
+            assembler,
+            clock: ScanClock::new(TIMESTAMP_WRAP_MS),
+            link: link::Decoder::new(),
+            encoder: link::Encoder::new(),
+            wheels,
+            source: None,
+            window: OdometryWindow::new(),
+            stream_time_us: 0,
+            commands: Deque::new(),
+            pending: None,
+            next: None,
+            last_odom: None,
+            initialized: false,
+            global: false,
+            force_update: false,
+            processed_us: 0,
+            counters: RobotCounters::default(),
+        };
+        if let Some(s) = seed {
+            if s.pose.is_finite() {
+                robot.init_around(&s.pose, &s.covariance);
+            }
+        }
+        Ok(robot)
+    }
+
+    /// Takes what is waiting on both sources, processes at most one revolution and sends what
+    /// it produced to `sink`. Call it whenever bytes may have arrived; it returns at once when
+    /// nothing is waiting.
+    pub fn poll(
+        &mut self,
+        lidar: &mut impl ByteSource,
+        link: &mut impl ByteSource,
+        sink: &mut impl Sink,
+    ) -> Progress {
+        let mut progress = Progress::default();
+        while self.window.has_room() && !self.commands.is_full() {
+            let Some(b) = link.next_byte() else { break };
+            progress.link_bytes += 1;
+            if let Some(frame) = self.link.push(b) {
+                self.on_frame(frame, sink);
+            }
+        }
+        while self.next.is_none() {
+            if self
+                .pending
+                .as_ref()
+                .is_some_and(|p| self.window.covers(p.t_us))
+            {
+                break;
+            }
+            let Some(b) = lidar.next_byte() else { break };
+            progress.lidar_bytes += 1;
+            self.push_lidar_byte(b);
+        }
+        let ready = match &self.pending {
+            Some(p) => self.window.covers(p.t_us) || self.next.is_some(),
+            None => false,
+        };
+        if ready {
+            if let Some(rev) = self.pending.take() {
+                let late = !self.window.covers(rev.t_us);
+                self.process(&rev, late, sink);
+                progress.processed = true;
+            }
+            self.pending = self.next.take();
+        }
+        progress
+    }
+
+    /// Sends a heartbeat now (the application sends one every
+    /// [`RobotConfig::heartbeat_every`] revolutions; a device calls this on its own timer too,
+    /// so that a stalled sensor still shows up on the computer).
+    ///
+    /// Its timestamp is the time of the last revolution processed, and its scans and updates
+    /// count up to that revolution: those follow from the byte streams alone. The link counters
+    /// (bytes, frames, odometry, errors) count what was read so far, which depends on how far
+    /// ahead the sender is.
+    pub fn send_heartbeat(&mut self, sink: &mut impl Sink) {
+        let d = self.lidar.stats();
+        let l = self.link.stats();
+        let heartbeat = Heartbeat {
+            timestamp_us: self.processed_us,
+            bytes: l.bytes,
+            frames: l.frames,
+            checksum_failures: l.bad_crc,
+            scans: self.counters.revolutions,
+            updates: self.counters.updates,
+            odometry: self.counters.odometry,
+            drops: self
+                .counters
+                .drops
+                .wrapping_add(self.counters.late_odometry)
+                .wrapping_add(d.bad_checksum),
+            link_errors: l.errors().wrapping_add(self.counters.refused),
+        };
+        self.send(&Message::Heartbeat(heartbeat), sink);
+    }
+
+    /// Counts `n` bytes or messages lost before they reached the application (a receive ring
+    /// that was full, a UART overrun); they are reported in the heartbeats' drops.
+    pub fn add_drops(&mut self, n: u32) {
+        self.counters.drops = self.counters.drops.wrapping_add(n);
+    }
+
+    /// The counters.
+    pub fn counters(&self) -> RobotCounters {
+        self.counters
+    }
+
+    /// The LiDAR decoder's counters.
+    pub fn lidar_stats(&self) -> DecoderStats {
+        self.lidar.stats()
+    }
+
+    /// The scan assembler's counters.
+    pub fn assembler_stats(&self) -> AssemblerStats {
+        self.assembler.stats()
+    }
+
+    /// The link decoder's counters.
+    pub fn link_stats(&self) -> LinkStats {
+        self.link.stats()
+    }
+
+    /// The filter (its particles, estimate and configuration).
+    pub fn filter(&self) -> &Mcl<'a, N> {
+        &self.mcl
+    }
+
+    /// The configuration in force (after any `SetParameters`).
+    pub fn config(&self) -> &RobotConfig {
+        &self.config
+    }
+
+    /// Whether the filter has particles (from a seed, an initial pose or a global start).
+    pub fn is_initialized(&self) -> bool {
+        self.initialized
+    }
+
+    /// The device clock: the last LiDAR timestamp, unwrapped, µs.
+    pub fn now_us(&self) -> u64 {
+        self.clock.now_us()
+    }
+
+    fn push_lidar_byte(&mut self, byte: u8) {
+        let (assembler, clock) = (&mut self.assembler, &mut self.clock);
+        let mut done: Option<Revolution<S>> = None;
+        self.lidar.push_byte(byte, &mut |point| {
+            if assembler.push(point).is_some() {
+                let r = assembler.revolution();
+                let t_us = match (r.start_timestamp_ms, r.end_timestamp_ms) {
+                    (Some(a), Some(b)) => {
+                        let t0 = clock.advance(a);
+                        let t1 = clock.advance(b);
+                        t0 + (t1 - t0) / 2
+                    }
+                    _ => clock.now_us(),
+                };
+                done = Some(Revolution {
+                    scan: assembler.scan().clone(),
+                    t_us,
+                });
+            }
+        });
+        if let Some(rev) = done {
+            self.counters.revolutions = self.counters.revolutions.wrapping_add(1);
+            if self.pending.is_none() {
+                self.pending = Some(rev);
+            } else {
+                self.next = Some(rev);
+            }
+        }
+    }
+
+    fn on_frame(&mut self, frame: Result<Frame, LinkError>, sink: &mut impl Sink) {
+        let frame = match frame {
+            Ok(f) => f,
+            Err(e) => {
+                if let Some(report) = ErrorReport::for_link_error(&e) {
+                    self.send(&Message::Error(report), sink);
+                }
+                return;
+            }
+        };
+        let t = frame.message.message_type();
+        let refusal = match frame.message {
+            Message::WheelOdometry(o) => self.on_odometry_pose(o.timestamp_us, o.pose),
+            Message::WheelTicks(k) => self.on_ticks(&k),
+            Message::SetInitialPose(p) => self.queue(Command::Initial(p)),
+            Message::StartGlobalLocalization => {
+                if self.free.is_none() {
+                    Err((ErrorCode::Refused, 0))
+                } else {
+                    self.queue(Command::Global)
+                }
+            }
+            Message::RequestNoMotionUpdate => {
+                let coming = self
+                    .commands
+                    .iter()
+                    .any(|q| matches!(q.command, Command::Initial(_) | Command::Global));
+                if self.initialized || coming {
+                    self.queue(Command::NoMotion)
+                } else {
+                    Err((ErrorCode::NotInitialized, 0))
+                }
+            }
+            Message::SetParameters(p) => self
+                .check_parameters(&p)
+                .and_then(|()| self.queue(Command::Parameters(p))),
+            // Messages of the device itself, sent back: not for the device.
+            _ => Err((ErrorCode::Refused, 0)),
+        };
+        if let Err((code, detail)) = refusal {
+            self.counters.refused = self.counters.refused.wrapping_add(1);
+            let report = ErrorReport {
+                code,
+                msg_type: t as u8,
+                seq: frame.seq,
+                detail,
+            };
+            self.send(&Message::Error(report), sink);
+        }
+    }
+
+    fn queue(&mut self, command: Command) -> Result<(), (ErrorCode, u8)> {
+        let at_us = self.stream_time_us;
+        self.commands
+            .push_back(Queued { at_us, command })
+            .map_err(|_| (ErrorCode::Refused, 0))
+    }
+
+    fn check_parameters(&self, p: &SetParameters) -> Result<(), (ErrorCode, u8)> {
+        if let Some(n) = p.particles {
+            if n == 0 || usize::from(n) > N {
+                return Err((ErrorCode::Refused, 0));
+            }
+        }
+        if let Some(k) = p.kappa {
+            if !(k.is_finite() && k > 0.0) {
+                return Err((ErrorCode::Refused, 0));
+            }
+        }
+        let alphas = self.merged_alphas(p);
+        OdometryNoise::new(alphas[0], alphas[1], alphas[2], alphas[3])
+            .map(|_| ())
+            .map_err(|_| (ErrorCode::Refused, 0))
+    }
+
+    fn merged_alphas(&self, p: &SetParameters) -> [f32; 4] {
+        let mut alphas = self.config.odom_noise.alphas();
+        for (a, new) in alphas.iter_mut().zip(p.odom_alpha) {
+            if let Some(v) = new {
+                *a = v;
+            }
+        }
+        alphas
+    }
+
+    fn on_odometry_pose(&mut self, t_us: u64, pose: Pose) -> Result<(), (ErrorCode, u8)> {
+        self.switch_source(OdometrySource::Poses);
+        self.accept_sample(t_us, pose)
+    }
+
+    fn on_ticks(&mut self, k: &link::WheelTicks) -> Result<(), (ErrorCode, u8)> {
+        if self.wheels.is_none() {
+            return Err((ErrorCode::Refused, 0));
+        }
+        if self
+            .window
+            .newest()
+            .is_some_and(|n| k.timestamp_us <= n.t_us)
+        {
+            return Err((ErrorCode::OutOfOrder, 0));
+        }
+        self.switch_source(OdometrySource::Ticks);
+        let Some(wheels) = self.wheels.as_mut() else {
+            return Err((ErrorCode::Refused, 0));
+        };
+        // A refused step (an encoder reset, a corrupted count) leaves the integrated pose where
+        // it was; the next step starts from this reading. Ticks are cumulative: a message
+        // refused later (its time, its speed) still moved the integrated pose, as the wheels did.
+        if wheels.step(k.left_ticks, k.right_ticks).is_err() {
+            return Err((
+                ErrorCode::ValueOutOfRange,
+                link::layout::wheel_ticks::LEFT_TICKS.start as u8,
+            ));
+        }
+        let pose = wheels.pose();
+        self.accept_sample(k.timestamp_us, pose)
+    }
+
+    fn switch_source(&mut self, to: OdometrySource) {
+        if self.source != Some(to) {
+            // Poses of another source are in another frame: start over without a motion step.
+            if self.source.is_some() {
+                self.window.clear();
+                self.last_odom = None;
+            }
+            self.source = Some(to);
+        }
+    }
+
+    fn accept_sample(&mut self, t_us: u64, pose: Pose) -> Result<(), (ErrorCode, u8)> {
+        let x_offset = link::layout::wheel_odometry::X_M.start as u8;
+        if let Some(n) = self.window.newest() {
+            if t_us <= n.t_us {
+                return Err((ErrorCode::OutOfOrder, 0));
+            }
+            let dt_s = (t_us - n.t_us) as f32 * 1e-6;
+            let (dx, dy) = (pose.x_m - n.pose.x_m, pose.y_m - n.pose.y_m);
+            let d = math::sqrt(dx * dx + dy * dy);
+            let a = wrap_angle(pose.theta_rad - n.pose.theta_rad).abs();
+            // A long silence is not checked against the speed limits (the robot may have been
+            // carried), but it still needs finite numbers.
+            let too_fast = dt_s < 1.0
+                && (d > self.config.max_speed_m_per_s * dt_s
+                    || a > self.config.max_turn_rad_per_s * dt_s);
+            if !(d.is_finite()) || too_fast {
+                return Err((ErrorCode::ValueOutOfRange, x_offset));
+            }
+        }
+        if !self.window.push(Sample { t_us, pose }) {
+            return Err((ErrorCode::Refused, 0));
+        }
+        self.stream_time_us = t_us;
+        self.counters.odometry = self.counters.odometry.wrapping_add(1);
+        Ok(())
+    }
+
+    fn odom_at(&self, t_us: u64) -> Option<window::Interpolated> {
+        self.window.at(t_us, self.config.max_odometry_gap_us)
+    }
+
+    fn init_around(&mut self, pose: &Pose, covariance: &[[f32; 3]; 3]) -> bool {
+        let c = |i: usize| {
+            covariance
+                .get(i)
+                .and_then(|r| r.get(i))
+                .copied()
+                .unwrap_or(0.0)
+                .max(0.0)
+        };
+        let sigma_xy = math::sqrt(0.5 * (c(0) + c(1))).max(self.config.min_init_sigma_xy_m);
+        let sigma_theta = math::sqrt(c(2)).max(self.config.min_init_sigma_theta_rad);
+        let ok = self
+            .mcl
+            .init_gaussian(
+                self.config.particles,
+                pose,
+                sigma_xy,
+                sigma_theta,
+                &mut self.rng,
+            )
+            .is_ok();
+        if ok {
+            self.initialized = true;
+            self.global = false;
+        }
+        ok
+    }
+
+    fn apply(&mut self, q: Queued) {
+        self.counters.commands = self.counters.commands.wrapping_add(1);
+        let odom_then = self.odom_at(q.at_us).map(|i| i.pose);
+        match q.command {
+            Command::Initial(p) => {
+                if self.init_around(&p.pose, &p.covariance) {
+                    self.last_odom = odom_then;
+                }
+            }
+            Command::Global => {
+                if let Some(free) = self.free {
+                    if self
+                        .mcl
+                        .init_uniform(self.config.particles, &free, &mut self.rng)
+                        .is_ok()
+                    {
+                        self.initialized = true;
+                        self.global = true;
+                        self.last_odom = odom_then;
+                    }
+                }
+            }
+            Command::NoMotion => self.force_update = true,
+            Command::Parameters(p) => {
+                let alphas = self.merged_alphas(&p);
+                if let Ok(noise) = OdometryNoise::new(alphas[0], alphas[1], alphas[2], alphas[3]) {
+                    if let Ok(c) =
+                        MclConfig::new(noise, self.config.resample_ess_fraction, 0.0, 0.0)
+                    {
+                        self.mcl.set_config(c);
+                        self.config.odom_noise = noise;
+                    }
+                }
+                if let Some(k) = p.kappa {
+                    if let Ok(m) = Tempered::new(self.model.inner().clone(), k, 1) {
+                        self.model = m;
+                        self.config.kappa = k;
+                    }
+                }
+                if let Some(n) = p.particles {
+                    self.config.particles = usize::from(n);
+                    if self.initialized && self.mcl.len() != usize::from(n) {
+                        // Redraw the cloud at the new size around the current estimate.
+                        let e = *self.mcl.estimate();
+                        let global = self.global;
+                        self.init_around(&e.pose, &e.covariance);
+                        self.global = global;
+                    }
+                }
+            }
+        }
+    }
+
+    fn process(&mut self, rev: &Revolution<S>, late: bool, sink: &mut impl Sink) {
+        while self.commands.front().is_some_and(|q| q.at_us <= rev.t_us) {
+            if let Some(q) = self.commands.pop_front() {
+                self.apply(q);
+            }
+        }
+        self.processed_us = rev.t_us;
+        if late {
+            self.counters.late_odometry = self.counters.late_odometry.wrapping_add(1);
+        }
+        self.update(rev, late, sink);
+        self.window.forget_before(rev.t_us);
+        let every = self.config.heartbeat_every;
+        if every > 0 && self.counters.revolutions % every == 0 {
+            self.send_heartbeat(sink);
+        }
+    }
+
+    fn update(&mut self, rev: &Revolution<S>, late: bool, sink: &mut impl Sink) {
+        if !self.initialized {
+            self.skip();
+            return;
+        }
+        let odom = self.odom_at(rev.t_us);
+        let mut stale = late;
+        let step = match (odom, self.last_odom) {
+            (Some(now), Some(before)) => {
+                stale |= now.stale;
+                OdometryStep::between(&before, &now.pose).ok()
+            }
+            (Some(now), None) => {
+                stale |= now.stale;
+                Some(OdometryStep::STILL)
+            }
+            (None, _) => {
+                stale = true;
+                Some(OdometryStep::STILL)
+            }
+        };
+        let Some(step) = step else {
+            self.skip();
+            return;
+        };
+        let moved = step.trans_m() >= self.config.update_min_d_m
+            || wrap_angle(step.rot1_rad() + step.rot2_rad()).abs() >= self.config.update_min_a_rad;
+        let forced = self.force_update;
+        if !(moved || forced) {
+            self.skip();
+            return;
+        }
+        self.force_update = false;
+        if let Some(now) = odom {
+            self.last_odom = Some(now.pose);
+        }
+        self.mcl.predict(&step, &mut self.rng);
+        let prepared = self.model.prepare(&self.layout, &rev.scan);
+        let update = match self.mcl.update_prepared(&prepared, None, &mut self.rng) {
+            Ok(u) => u,
+            Err(_) => {
+                self.skip();
+                return;
+            }
+        };
+        self.counters.updates = self.counters.updates.wrapping_add(1);
+        let mut flags = EstimateFlags::INITIALIZED;
+        if update.resampled {
+            flags = flags | EstimateFlags::RESAMPLED;
+        }
+        if self.global {
+            flags = flags | EstimateFlags::GLOBAL_LOCALIZATION;
+        }
+        if forced && !moved {
+            flags = flags | EstimateFlags::NO_MOTION_UPDATE;
+        }
+        if stale {
+            flags = flags | EstimateFlags::ODOMETRY_STALE;
+            self.counters.stale_odometry = self.counters.stale_odometry.wrapping_add(1);
+        }
+        let e = *self.mcl.estimate();
+        if self.global && settled(&e.covariance) {
+            self.global = false;
+        }
+        let estimate = link::Estimate::from_mcl(&e, rev.t_us, flags, Quality::default());
+        if self.send(&Message::Estimate(estimate), sink) && !self.global {
+            sink.save(&Seed {
+                pose: estimate.pose,
+                covariance: estimate.covariance,
+            });
+        }
+    }
+
+    fn skip(&mut self) {
+        self.counters.skipped = self.counters.skipped.wrapping_add(1);
+    }
+
+    /// Encodes and sends `message`; `false` when it could not be encoded (never sent).
+    fn send(&mut self, message: &Message, sink: &mut impl Sink) -> bool {
+        let mut wire = [0u8; MAX_WIRE_LEN];
+        match self.encoder.encode(message, &mut wire) {
+            Ok(n) => {
+                sink.send(message, wire.get(..n).unwrap_or(&[]));
+                self.counters.frames_sent = self.counters.frames_sent.wrapping_add(1);
+                true
+            }
+            Err(_) => {
+                self.counters.encode_failures = self.counters.encode_failures.wrapping_add(1);
+                false
+            }
+        }
+    }
+}
+
+/// Whether a global localization has narrowed to one place: position σ under 0.5 m and heading
+/// σ under 0.3 rad.
+fn settled(c: &[[f32; 3]; 3]) -> bool {
+    let at = |i: usize| {
+        c.get(i)
+            .and_then(|r| r.get(i))
+            .copied()
+            .unwrap_or(f32::INFINITY)
+    };
+    at(0) + at(1) < 0.25 && at(2) < 0.09
+}
+
+/// The message types a device running [`Robot`] accepts.
+pub const ACCEPTED: [MessageType; 6] = [
+    MessageType::WheelOdometry,
+    MessageType::WheelTicks,
+    MessageType::SetInitialPose,
+    MessageType::StartGlobalLocalization,
+    MessageType::RequestNoMotionUpdate,
+    MessageType::SetParameters,
+];

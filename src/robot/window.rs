@@ -1,0 +1,167 @@
+//! The recent odometry, timestamped, and the pose interpolated at any time within it.
+
+use crate::pose::{wrap_angle, Pose};
+use heapless::Deque;
+
+/// Odometry samples kept (50 Hz odometry: 1.28 s).
+pub const WINDOW: usize = 64;
+
+/// One odometry pose and when it was measured (µs, device clock).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Measurement time, µs.
+    pub t_us: u64,
+    /// Odometry pose (the wheel odometry's own frame), m and rad.
+    pub pose: Pose,
+}
+
+/// The odometry pose at a time, and how it was found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interpolated {
+    /// The pose.
+    pub pose: Pose,
+    /// `true` when the time lies outside the samples (the nearest one was taken) or between
+    /// two samples further apart than the allowed gap.
+    pub stale: bool,
+}
+
+/// Odometry samples in time order (strictly increasing timestamps).
+#[derive(Clone, Debug, Default)]
+pub struct OdometryWindow {
+    samples: Deque<Sample, WINDOW>,
+}
+
+impl OdometryWindow {
+    /// An empty window.
+    pub const fn new() -> Self {
+        Self {
+            samples: Deque::new(),
+        }
+    }
+
+    /// Whether another sample fits.
+    pub fn has_room(&self) -> bool {
+        !self.samples.is_full()
+    }
+
+    /// The newest sample.
+    pub fn newest(&self) -> Option<&Sample> {
+        self.samples.back()
+    }
+
+    /// Samples held.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Whether no sample is held.
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// Appends a sample; `false` (and nothing kept) when the window is full or `t_us` is not
+    /// after the newest sample's.
+    pub fn push(&mut self, sample: Sample) -> bool {
+        if self.newest().is_some_and(|n| sample.t_us <= n.t_us) {
+            return false;
+        }
+        self.samples.push_back(sample).is_ok()
+    }
+
+    /// Whether the samples reach time `t_us` (the newest is at or after it).
+    pub fn covers(&self, t_us: u64) -> bool {
+        self.newest().is_some_and(|n| n.t_us >= t_us)
+    }
+
+    /// The pose at `t_us`: linear in position, along the shorter arc in heading, between the
+    /// samples on either side. `None` when the window is empty.
+    pub fn at(&self, t_us: u64, max_gap_us: u64) -> Option<Interpolated> {
+        let first = *self.samples.front()?;
+        if t_us <= first.t_us {
+            return Some(Interpolated {
+                pose: first.pose,
+                stale: t_us < first.t_us,
+            });
+        }
+        let mut before = first;
+        for s in self.samples.iter() {
+            if s.t_us >= t_us {
+                let span = s.t_us - before.t_us;
+                let f = if span == 0 {
+                    1.0
+                } else {
+                    ((t_us - before.t_us) as f64 / span as f64) as f32
+                };
+                let (a, b) = (before.pose, s.pose);
+                let pose = Pose::new(
+                    a.x_m + f * (b.x_m - a.x_m),
+                    a.y_m + f * (b.y_m - a.y_m),
+                    wrap_angle(a.theta_rad + f * wrap_angle(b.theta_rad - a.theta_rad)),
+                );
+                return Some(Interpolated {
+                    pose,
+                    stale: span > max_gap_us,
+                });
+            }
+            before = *s;
+        }
+        Some(Interpolated {
+            pose: before.pose,
+            stale: true,
+        })
+    }
+
+    /// Drops the samples no longer needed once time `t_us` is reached: every sample before the
+    /// last one at or before `t_us`.
+    pub fn forget_before(&mut self, t_us: u64) {
+        while self.samples.len() >= 2 && self.samples.iter().nth(1).is_some_and(|s| s.t_us <= t_us)
+        {
+            self.samples.pop_front();
+        }
+    }
+
+    /// Drops every sample.
+    pub fn clear(&mut self) {
+        self.samples.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn s(t_us: u64, x: f32, th: f32) -> Sample {
+        Sample {
+            t_us,
+            pose: Pose::new(x, 0.0, th),
+        }
+    }
+
+    #[test]
+    fn interpolates_position_and_heading_across_pi() {
+        let mut w = OdometryWindow::new();
+        assert!(w.push(s(1_000, 0.0, 3.0)));
+        assert!(w.push(s(3_000, 2.0, -3.0)));
+        let at = w.at(2_000, 10_000).unwrap();
+        assert!((at.pose.x_m - 1.0).abs() < 1e-6);
+        // Halfway along the short arc through ±π.
+        assert!((at.pose.theta_rad.abs() - core::f32::consts::PI).abs() < 1e-3);
+        assert!(!at.stale);
+        assert!(w.at(2_000, 1_000).unwrap().stale);
+        assert!(w.at(5_000, 10_000).unwrap().stale);
+        assert!(w.covers(3_000) && !w.covers(3_001));
+    }
+
+    #[test]
+    fn refuses_time_going_backwards_and_forgets_old_samples() {
+        let mut w = OdometryWindow::new();
+        assert!(w.push(s(10, 0.0, 0.0)));
+        assert!(!w.push(s(10, 1.0, 0.0)));
+        assert!(!w.push(s(5, 1.0, 0.0)));
+        assert!(w.push(s(20, 1.0, 0.0)));
+        assert!(w.push(s(30, 2.0, 0.0)));
+        w.forget_before(25);
+        assert_eq!(w.len(), 2);
+        assert_eq!(w.samples.front().map(|s| s.t_us), Some(20));
+    }
+}
