@@ -12,6 +12,7 @@
 #[rustfmt::skip]
 pub mod fixed_cases;
 pub mod reference_cases;
+pub mod serial;
 pub mod size_program;
 pub mod usart;
 

@@ -170,6 +170,40 @@ pub struct RobotCounters {
     pub encode_failures: u32,
 }
 
+/// The stages of [`Robot::poll_probed`], for a caller that measures them (instruction counts
+/// on the device: `firmware/src/bin/robot.rs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// Decoding link bytes (odometry and commands), from the first byte taken to the last.
+    Link,
+    /// Decoding and assembling LiDAR bytes, from the first byte taken to the last.
+    Lidar,
+    /// The motion model's sample of every particle.
+    Predict,
+    /// Preparing the scan and updating the filter (scoring, weights, estimate, resampling).
+    Update,
+    /// Encoding a frame and handing it to the sink.
+    Send,
+}
+
+/// Told when each [`Stage`] starts and ends. Every method does nothing by default.
+pub trait Probe {
+    /// `stage` starts.
+    fn enter(&mut self, stage: Stage) {
+        let _ = stage;
+    }
+    /// `stage` ends.
+    fn leave(&mut self, stage: Stage) {
+        let _ = stage;
+    }
+}
+
+/// The probe that measures nothing.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoProbe;
+
+impl Probe for NoProbe {}
+
 /// What one [`Robot::poll`] did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Progress {
@@ -324,13 +358,30 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         link: &mut impl ByteSource,
         sink: &mut impl Sink,
     ) -> Progress {
+        self.poll_probed(lidar, link, sink, &mut NoProbe)
+    }
+
+    /// [`Robot::poll`], telling `probe` when each [`Stage`] starts and ends.
+    pub fn poll_probed(
+        &mut self,
+        lidar: &mut impl ByteSource,
+        link: &mut impl ByteSource,
+        sink: &mut impl Sink,
+        probe: &mut impl Probe,
+    ) -> Progress {
         let mut progress = Progress::default();
         while self.window.has_room() && !self.commands.is_full() {
             let Some(b) = link.next_byte() else { break };
+            if progress.link_bytes == 0 {
+                probe.enter(Stage::Link);
+            }
             progress.link_bytes += 1;
             if let Some(frame) = self.link.push(b) {
                 self.on_frame(frame, sink);
             }
+        }
+        if progress.link_bytes > 0 {
+            probe.leave(Stage::Link);
         }
         while self.next.is_none() {
             if self
@@ -341,8 +392,14 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
                 break;
             }
             let Some(b) = lidar.next_byte() else { break };
+            if progress.lidar_bytes == 0 {
+                probe.enter(Stage::Lidar);
+            }
             progress.lidar_bytes += 1;
             self.push_lidar_byte(b);
+        }
+        if progress.lidar_bytes > 0 {
+            probe.leave(Stage::Lidar);
         }
         let ready = match &self.pending {
             Some(p) => self.window.covers(p.t_us) || self.next.is_some(),
@@ -351,7 +408,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         if ready {
             if let Some(rev) = self.pending.take() {
                 let late = !self.window.covers(rev.t_us);
-                self.process(&rev, late, sink);
+                self.process(&rev, late, sink, probe);
                 progress.processed = true;
             }
             self.pending = self.next.take();
@@ -569,10 +626,12 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         let Some(wheels) = self.wheels.as_mut() else {
             return Err((ErrorCode::Refused, 0));
         };
-        // A refused step (an encoder reset, a corrupted count) leaves the integrated pose where
-        // it was; the next step starts from this reading. Ticks are cumulative: a message
-        // refused later (its time, its speed) still moved the integrated pose, as the wheels did.
+        // A refused step (an encoder reset, a corrupted count) leaves the wheel model as it was:
+        // the next reading is measured from the last good one. Ticks are cumulative: a message
+        // refused later (its speed) still moved the integrated pose, as the wheels did.
+        let before = wheels.clone();
         if wheels.step(k.left_ticks, k.right_ticks).is_err() {
+            *wheels = before;
             return Err((
                 ErrorCode::ValueOutOfRange,
                 link::layout::wheel_ticks::LEFT_TICKS.start as u8,
@@ -705,7 +764,13 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         }
     }
 
-    fn process(&mut self, rev: &Revolution<S>, late: bool, sink: &mut impl Sink) {
+    fn process(
+        &mut self,
+        rev: &Revolution<S>,
+        late: bool,
+        sink: &mut impl Sink,
+        probe: &mut impl Probe,
+    ) {
         while self.commands.front().is_some_and(|q| q.at_us <= rev.t_us) {
             if let Some(q) = self.commands.pop_front() {
                 self.apply(q);
@@ -715,18 +780,37 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         if late {
             self.counters.late_odometry = self.counters.late_odometry.wrapping_add(1);
         }
-        self.update(rev, late, sink);
+        if let Some(estimate) = self.update(rev, late, probe) {
+            probe.enter(Stage::Send);
+            let sent = self.send(&Message::Estimate(estimate), sink);
+            probe.leave(Stage::Send);
+            if sent && !self.global {
+                sink.save(&Seed {
+                    pose: estimate.pose,
+                    covariance: estimate.covariance,
+                });
+            }
+        }
         self.window.forget_before(rev.t_us);
         let every = self.config.heartbeat_every;
         if every > 0 && self.counters.revolutions % every == 0 {
+            probe.enter(Stage::Send);
             self.send_heartbeat(sink);
+            probe.leave(Stage::Send);
         }
     }
 
-    fn update(&mut self, rev: &Revolution<S>, late: bool, sink: &mut impl Sink) {
+    /// Predicts and updates with `rev`; the estimate to send, `None` when the revolution was
+    /// not used.
+    fn update(
+        &mut self,
+        rev: &Revolution<S>,
+        late: bool,
+        probe: &mut impl Probe,
+    ) -> Option<link::Estimate> {
         if !self.initialized {
             self.skip();
-            return;
+            return None;
         }
         let odom = self.odom_at(rev.t_us);
         let mut stale = late;
@@ -746,27 +830,29 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         };
         let Some(step) = step else {
             self.skip();
-            return;
+            return None;
         };
         let moved = step.trans_m() >= self.config.update_min_d_m
             || wrap_angle(step.rot1_rad() + step.rot2_rad()).abs() >= self.config.update_min_a_rad;
         let forced = self.force_update;
         if !(moved || forced) {
             self.skip();
-            return;
+            return None;
         }
         self.force_update = false;
         if let Some(now) = odom {
             self.last_odom = Some(now.pose);
         }
+        probe.enter(Stage::Predict);
         self.mcl.predict(&step, &mut self.rng);
+        probe.leave(Stage::Predict);
+        probe.enter(Stage::Update);
         let prepared = self.model.prepare(&self.layout, &rev.scan);
-        let update = match self.mcl.update_prepared(&prepared, None, &mut self.rng) {
-            Ok(u) => u,
-            Err(_) => {
-                self.skip();
-                return;
-            }
+        let update = self.mcl.update_prepared(&prepared, None, &mut self.rng);
+        probe.leave(Stage::Update);
+        let Ok(update) = update else {
+            self.skip();
+            return None;
         };
         self.counters.updates = self.counters.updates.wrapping_add(1);
         let mut flags = EstimateFlags::INITIALIZED;
@@ -784,16 +870,15 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             self.counters.stale_odometry = self.counters.stale_odometry.wrapping_add(1);
         }
         let e = *self.mcl.estimate();
-        if self.global && settled(&e.covariance) {
+        if self.global && settled(&self.mcl, &e.pose) {
             self.global = false;
         }
-        let estimate = link::Estimate::from_mcl(&e, rev.t_us, flags, Quality::default());
-        if self.send(&Message::Estimate(estimate), sink) && !self.global {
-            sink.save(&Seed {
-                pose: estimate.pose,
-                covariance: estimate.covariance,
-            });
-        }
+        Some(link::Estimate::from_mcl(
+            &e,
+            rev.t_us,
+            flags,
+            Quality::default(),
+        ))
     }
 
     fn skip(&mut self) {
@@ -817,16 +902,18 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     }
 }
 
-/// Whether a global localization has narrowed to one place: position σ under 0.5 m and heading
-/// σ under 0.3 rad.
-fn settled(c: &[[f32; 3]; 3]) -> bool {
-    let at = |i: usize| {
-        c.get(i)
-            .and_then(|r| r.get(i))
-            .copied()
-            .unwrap_or(f32::INFINITY)
-    };
-    at(0) + at(1) < 0.25 && at(2) < 0.09
+/// Whether a global localization has narrowed to one place: 90 % of the particles' weight within
+/// 0.5 m and 0.3 rad of the estimate.
+fn settled<const N: usize>(mcl: &Mcl<'_, N>, at: &Pose) -> bool {
+    let (mut near, mut total) = (0.0f32, 0.0f32);
+    for (p, &w) in mcl.poses().iter().zip(mcl.weights()) {
+        total += w;
+        let (dx, dy) = (p.x_m - at.x_m, p.y_m - at.y_m);
+        if dx * dx + dy * dy < 0.25 && wrap_angle(p.theta_rad - at.theta_rad).abs() < 0.3 {
+            near += w;
+        }
+    }
+    total > 0.0 && near >= 0.9 * total
 }
 
 /// The message types a device running [`Robot`] accepts.

@@ -181,6 +181,16 @@ impl Regions {
             .fold((0, 0), |(t, k), (_, c)| (t + c, k + 1))
     }
 
+    /// The largest count of the region `name` (0 when it was never measured).
+    pub fn max(&self, name: &str) -> u64 {
+        self.0
+            .iter()
+            .filter(|(n, _)| n == name)
+            .map(|(_, c)| *c)
+            .max()
+            .unwrap_or(0)
+    }
+
     /// How many regions were counted.
     pub fn len(&self) -> usize {
         self.0.len()

@@ -23,6 +23,7 @@ mod lidar_ref;
 mod nopanic;
 mod process;
 mod qemu;
+mod robot;
 mod toolchain;
 mod track;
 mod willow;
@@ -161,6 +162,27 @@ enum Task {
     },
     /// Regenerate the demo assets from the Intel log in data/: the map blobs (firmware/assets/)
     /// and the scans (fixtures/assets/).
+    /// The robot application on the STM32F405 (QEMU `netduinoplus2`): the Intel lab log sent
+    /// as an LD06 stream at 10 Hz into USART1 and 50 Hz wheel-encoder odometry of an imperfect
+    /// differential drive (and commands, and bad input) into USART2; the estimates read back
+    /// from USART3, recomputed on the host bit for bit, and compared with the logged poses.
+    Robot {
+        /// Send only the log's first N scans (all 910 by default).
+        #[arg(long, value_name = "N")]
+        scans: Option<usize>,
+        /// No kidnap: no global localization and no second initial pose.
+        #[arg(long)]
+        no_kidnap: bool,
+        /// Count the instructions of every stage: the time budget of a revolution.
+        #[arg(long)]
+        count: bool,
+        /// Count the receive interrupt handlers instead (their longest path).
+        #[arg(long, conflicts_with = "count")]
+        isr: bool,
+        /// Only the host: the streams, the replay and its accuracy, without QEMU.
+        #[arg(long, conflicts_with_all = ["count", "isr"])]
+        host_only: bool,
+    },
     DemoAssets,
     /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
     Refcases {
@@ -206,6 +228,19 @@ fn main() -> ExitCode {
         Task::Budgets { machine, features } => budgets::budgets(&machine, features.as_deref()),
         Task::Nopanic { show_failure } => nopanic::nopanic(show_failure),
         Task::Lidar { no_count, split } => lidar::lidar(!no_count, split),
+        Task::Robot {
+            scans,
+            no_kidnap,
+            count,
+            isr,
+            host_only,
+        } => robot::robot(robot::Options {
+            scans,
+            no_kidnap,
+            count,
+            isr,
+            host_only,
+        }),
         Task::DemoAssets => demo::demo_assets(),
         Task::Track { board, insns } => {
             if insns {

@@ -262,3 +262,165 @@ pub fn run_with_uart(
         elapsed,
     })
 }
+
+/// A run of the robot application: what it printed, what it sent on USART3, how long it took.
+pub struct RobotRun {
+    /// Exit code, stdout, stderr.
+    pub finished: Finished,
+    /// The bytes of USART3.
+    pub usart3: Vec<u8>,
+    /// From QEMU's start to its end.
+    pub elapsed: Duration,
+}
+
+/// Starts `elf` on the `netduinoplus2` with USART1 and USART2 on listening Unix sockets and
+/// USART3 into a file; waits for the `ready` line; then writes `lidar` into USART1 and `link`
+/// into USART2, each from its own thread (QEMU takes a byte only when the firmware has read the
+/// previous one, so each write blocks until the firmware catches up), and waits for QEMU to
+/// exit (the firmware ends once both lines have been silent, feature `emulator`), at most
+/// `timeout_s`.
+pub fn run_robot(
+    elf: &Path,
+    ready: &str,
+    lidar: &[u8],
+    link: &[u8],
+    extra: &[String],
+    timeout_s: u64,
+) -> Result<RobotRun> {
+    let dir = scratch()?;
+    let (s1, s2, out3) = (
+        dir.join("usart1.sock"),
+        dir.join("usart2.sock"),
+        dir.join("usart3.bin"),
+    );
+    let (out_p, err_p) = (dir.join("robot.stdout"), dir.join("robot.stderr"));
+    let file = |p: &Path| File::create(p).map_err(|e| Error::io(p, e));
+    // Without `-icount`: the application's output follows from the bytes alone (the host
+    // recomputes it), the counting plugin's counts do not depend on timing, and QEMU delivers
+    // the serial bytes about twice as fast with the guest's clock on the host's.
+    let mut cmd = Command::new("timeout");
+    cmd.args([
+        &timeout_s.to_string(),
+        "qemu-system-arm",
+        "-machine",
+        "netduinoplus2",
+        "-nographic",
+        "-semihosting-config",
+        "enable=on,target=native",
+    ]);
+    cmd.args(["-monitor", "none"]);
+    for (id, sock) in [("usart1", &s1), ("usart2", &s2)] {
+        cmd.arg("-chardev").arg(format!(
+            "socket,id={id},path={},server=on,wait=off",
+            sock.display()
+        ));
+    }
+    cmd.arg("-chardev")
+        .arg(format!("file,id=usart3,path={}", out3.display()))
+        .args(["-serial", "chardev:usart1"])
+        .args(["-serial", "chardev:usart2"])
+        .args(["-serial", "chardev:usart3"])
+        .args(extra)
+        .arg("-kernel")
+        .arg(elf)
+        .stdin(Stdio::null())
+        .stdout(file(&out_p)?)
+        .stderr(file(&err_p)?);
+    eprintln!(
+        "+ {} >{} 2>{}",
+        show(&cmd),
+        out_p.display(),
+        err_p.display()
+    );
+    let started = Instant::now();
+    let child = cmd.spawn().map_err(|e| spawn_error(&cmd, e))?;
+    let mut guard = Guard(Some(child));
+    let read = |p: &Path| fs::read_to_string(p).unwrap_or_default();
+    loop {
+        if read(&out_p).lines().any(|l| l.starts_with(ready)) {
+            break;
+        }
+        let exited = guard
+            .0
+            .as_mut()
+            .and_then(|c| c.try_wait().ok().flatten())
+            .is_some();
+        if exited || started.elapsed() > Duration::from_secs(READY_TIMEOUT_S) {
+            let why = if exited { "QEMU exited" } else { "timed out" };
+            return Err(Error::Qemu(format!(
+                "{why} before the firmware's ready line:\n{}{}",
+                read(&out_p),
+                read(&err_p)
+            )));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    eprintln!(
+        "xtask: firmware ready after {:.1} s; sending {} bytes into USART1 and {} into USART2",
+        started.elapsed().as_secs_f64(),
+        lidar.len(),
+        link.len()
+    );
+    let connect = |p: &Path| -> Result<UnixStream> {
+        let c = UnixStream::connect(p).map_err(|e| Error::io(p, e))?;
+        c.set_write_timeout(Some(Duration::from_secs(timeout_s)))
+            .map_err(|e| Error::io(p, e))?;
+        Ok(c)
+    };
+    let (mut c1, mut c2) = (connect(&s1)?, connect(&s2)?);
+    let (sent, status) = std::thread::scope(|scope| {
+        let w2 = scope.spawn(move || -> std::io::Result<UnixStream> {
+            c2.write_all(link)?;
+            c2.flush()?;
+            Ok(c2)
+        });
+        let w1 = scope.spawn(move || -> std::io::Result<UnixStream> {
+            let mut at = Instant::now();
+            for (i, piece) in lidar.chunks(16384).enumerate() {
+                c1.write_all(piece)?;
+                if at.elapsed() > Duration::from_secs(10) {
+                    eprintln!(
+                        "xtask: sent {} of {} LiDAR bytes",
+                        (i + 1) * 16384,
+                        lidar.len()
+                    );
+                    at = Instant::now();
+                }
+            }
+            c1.flush()?;
+            Ok(c1)
+        });
+        // Keep the connections open until QEMU ends: the bytes still in the sockets are read.
+        let status = guard.0.take().map(|mut c| c.wait()).transpose();
+        let sent = (w1.join(), w2.join());
+        (sent, status)
+    });
+    let status = status.map_err(|e| Error::Spawn {
+        command: "waiting for QEMU".into(),
+        source: e,
+    })?;
+    let elapsed = started.elapsed();
+    let (stdout, stderr) = (read(&out_p), read(&err_p));
+    let usart3 = fs::read(&out3).map_err(|e| Error::io(&out3, e))?;
+    let _ = fs::remove_dir_all(&dir);
+    for (what, r) in [("USART1", sent.0), ("USART2", sent.1)] {
+        match r {
+            Ok(Ok(_)) => {}
+            Ok(Err(e)) => {
+                return Err(Error::Qemu(format!(
+                    "sending into {what} failed ({e}); the firmware printed:\n{stdout}{stderr}"
+                )))
+            }
+            Err(_) => return Err(Error::Host(format!("the {what} writer thread panicked"))),
+        }
+    }
+    Ok(RobotRun {
+        finished: Finished {
+            code: status.and_then(|s| s.code()).unwrap_or(137),
+            stdout,
+            stderr,
+        },
+        usart3,
+        elapsed,
+    })
+}

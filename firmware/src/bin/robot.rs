@@ -1,0 +1,513 @@
+//! The firmware a robot's base controller runs: the LD06's bytes in on USART1 and wheel
+//! odometry and commands in on USART2, each received in its interrupt handler into a lock-free
+//! ring; the localizer ([`beamfield::robot::Robot`]) in the main loop; estimates, heartbeats and
+//! typed errors out on USART3 (the link protocol, `docs/link-protocol.md`). STM32F405 (QEMU
+//! `netduinoplus2`: the Nth `-serial` is USART N); `cargo xtask robot` plays the robot around it.
+//!
+//! The map (the Intel lab's 5 cm distance field and its free space) is linked into flash; the
+//! setup is `fixtures/src/robot_plan.rs`, which the host's replay uses too. The last good
+//! estimate is kept in RAM that a reset does not clear ([`SeedStore`]; a flash page on a
+//! product) and seeds the next start.
+//!
+//! Features: `count` marks the stages of every poll for the instruction counter (interrupts
+//! masked inside each counted region, so the counts are exact, and the main loop waits for a
+//! chunk of bytes before it polls, so the regions stay few); `count-isr` marks every run of the
+//! receive interrupt handlers instead; `emulator` ends the program (semihosting exit) once the
+//! LiDAR has been silent for [`EXIT_AFTER_MS`], printing the counters.
+#![no_std]
+#![no_main]
+
+use beamfield::field::FreeSpace;
+use beamfield::link::Message;
+use beamfield::robot::{ByteSource, Probe, Robot, Seed, Sink, Stage};
+use beamfield::FieldView;
+use beamfield_firmware::serial::{self, Backpressure, PCLK1_HZ, PCLK2_HZ};
+use beamfield_firmware::{exit, println};
+use beamfield_fixtures::robot_plan::{self, baud, ring, BEAMS, CAPACITY};
+use core::cell::RefCell;
+use core::sync::atomic::{AtomicU32, Ordering};
+use cortex_m::interrupt::Mutex;
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m::peripheral::NVIC;
+use cortex_m_rt::{entry, exception};
+use heapless::spsc::{Consumer, Producer, Queue};
+use panic_semihosting as _;
+use stm32f4::stm32f405::{usart1::RegisterBlock, Interrupt, USART1, USART2, USART3};
+
+/// The 5 cm distance field of the Intel map (the demo's, `docs/demo.md`).
+static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
+/// Its known-free cells, for global localization (`docs/free-space-format.md`).
+static FREE: &[u8] = include_bytes!("../../assets/intel-free-space.bin");
+
+/// Silence on the LiDAR line after which a heartbeat goes out every second, ms.
+const STALL_MS: u32 = 1_000;
+/// With the feature `emulator`: silence on both input lines after which the program ends, ms.
+const EXIT_AFTER_MS: u32 = 3_000;
+/// With the feature `count`: LiDAR bytes the main loop waits for before it polls (or 20 ms of
+/// silence).
+#[cfg(feature = "count")]
+const COUNT_CHUNK: usize = 1024;
+
+/// The receive rings' producer ends, owned by the interrupt handlers.
+static LIDAR_IN: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));
+static LINK_IN: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));
+static LIDAR_STATE: Backpressure = Backpressure::new();
+static LINK_STATE: Backpressure = Backpressure::new();
+/// Milliseconds since start (SysTick).
+static MILLIS: AtomicU32 = AtomicU32::new(0);
+
+fn regs(which: Interrupt) -> &'static RegisterBlock {
+    // SAFETY: the register blocks are memory-mapped hardware at fixed addresses for the whole
+    // run. The main loop and the handlers touch disjoint bits, except CR1.RXNEIE, which the
+    // handler clears only while it is set and the main loop sets only after the handler
+    // cleared it (`serial::resume`), so no read-modify-write of CR1 races another.
+    #[allow(unsafe_code)]
+    unsafe {
+        match which {
+            Interrupt::USART2 => &*USART2::ptr(),
+            Interrupt::USART3 => &*USART3::ptr(),
+            _ => &*USART1::ptr(),
+        }
+    }
+}
+
+fn on_rx(
+    line: Interrupt,
+    ring: &Mutex<RefCell<Option<Producer<'static, u8>>>>,
+    state: &Backpressure,
+) {
+    #[cfg(feature = "count-isr")]
+    beamfield_firmware::bench_mark_start();
+    cortex_m::interrupt::free(|cs| {
+        if let Some(p) = ring.borrow(cs).borrow_mut().as_mut() {
+            serial::on_rx_interrupt(regs(line), line, p, state);
+        }
+    });
+    #[cfg(feature = "count-isr")]
+    beamfield_firmware::bench_mark_end();
+}
+
+/// Every device interrupt lands here (no device vector table is linked: the programs share
+/// one runtime setup with the MPS2 board's): USART1 is IRQ 37, USART2 is IRQ 38.
+#[exception]
+#[allow(unsafe_code)]
+unsafe fn DefaultHandler(irqn: i16) {
+    match irqn {
+        37 => on_rx(Interrupt::USART1, &LIDAR_IN, &LIDAR_STATE),
+        38 => on_rx(Interrupt::USART2, &LINK_IN, &LINK_STATE),
+        _ => {}
+    }
+}
+
+#[exception]
+fn SysTick() {
+    MILLIS.fetch_add(1, Ordering::Relaxed);
+}
+
+fn millis() -> u32 {
+    MILLIS.load(Ordering::Relaxed)
+}
+
+/// The last good estimate, in RAM that a reset leaves alone (`.uninit`): a magic word, the
+/// pose and covariance as f32 bit patterns, and a checksum. A product keeps it in a flash page
+/// instead (written only when the pose has moved, to spare the flash).
+struct SeedStore;
+
+const SEED_MAGIC: u32 = 0x5EED_B0B0;
+const SEED_WORDS: usize = 12;
+
+#[link_section = ".uninit.beamfield_seed"]
+static mut SEED_WORDS_RAM: core::mem::MaybeUninit<[u32; SEED_WORDS]> =
+    core::mem::MaybeUninit::uninit();
+
+fn seed_checksum(words: &[u32]) -> u32 {
+    words
+        .iter()
+        .fold(0x811C_9DC5u32, |h, &w| (h ^ w).wrapping_mul(0x0100_0193))
+}
+
+impl SeedStore {
+    fn words() -> [u32; SEED_WORDS] {
+        // SAFETY: plain words in RAM; any bit pattern is a valid `[u32; N]` and only the main
+        // loop touches them (no interrupt handler does).
+        #[allow(unsafe_code)]
+        unsafe {
+            core::ptr::read_volatile(
+                core::ptr::addr_of!(SEED_WORDS_RAM).cast::<[u32; SEED_WORDS]>(),
+            )
+        }
+    }
+
+    fn load() -> Option<Seed> {
+        let w = Self::words();
+        let (body, sum) = w.split_at(SEED_WORDS - 1);
+        if w.first() != Some(&SEED_MAGIC) || sum.first() != Some(&seed_checksum(body)) {
+            return None;
+        }
+        let f = |i: usize| f32::from_bits(w.get(i).copied().unwrap_or(0));
+        let seed = Seed {
+            pose: beamfield::Pose::new(f(1), f(2), f(3)),
+            covariance: [[f(4), f(5), f(6)], [f(5), f(7), f(8)], [f(6), f(8), f(9)]],
+        };
+        seed.pose.is_finite().then_some(seed)
+    }
+
+    fn save(seed: &Seed) {
+        let c = &seed.covariance;
+        let mut w = [
+            SEED_MAGIC,
+            seed.pose.x_m.to_bits(),
+            seed.pose.y_m.to_bits(),
+            seed.pose.theta_rad.to_bits(),
+            c[0][0].to_bits(),
+            c[0][1].to_bits(),
+            c[0][2].to_bits(),
+            c[1][1].to_bits(),
+            c[1][2].to_bits(),
+            c[2][2].to_bits(),
+            0,
+            0,
+        ];
+        w[SEED_WORDS - 1] = seed_checksum(&w[..SEED_WORDS - 1]);
+        // SAFETY: as in `words`.
+        #[allow(unsafe_code)]
+        unsafe {
+            core::ptr::write_volatile(
+                core::ptr::addr_of_mut!(SEED_WORDS_RAM).cast::<[u32; SEED_WORDS]>(),
+                w,
+            )
+        }
+    }
+}
+
+/// Frames go into the transmit ring (whole, or not at all) and the estimate into the store.
+struct TxSink {
+    ring: Producer<'static, u8>,
+    frames: u32,
+    dropped: u32,
+    saved: u32,
+}
+
+impl Sink for TxSink {
+    fn send(&mut self, _message: &Message, wire: &[u8]) {
+        let room = self.ring.capacity() - self.ring.len();
+        if wire.len() > room {
+            self.dropped += 1;
+            return;
+        }
+        for &b in wire {
+            let _ = self.ring.enqueue(b);
+        }
+        self.frames += 1;
+    }
+
+    fn save(&mut self, seed: &Seed) {
+        SeedStore::save(seed);
+        self.saved += 1;
+    }
+}
+
+/// Counted regions (feature `count`): the stage's name, then the markers, with interrupts
+/// masked so the count is the stage's work alone.
+struct CountProbe;
+
+impl Probe for CountProbe {
+    fn enter(&mut self, stage: Stage) {
+        #[cfg(feature = "count")]
+        {
+            use beamfield_fixtures::regions::robot as r;
+            cortex_m::interrupt::disable();
+            let name = match stage {
+                Stage::Link => r::LINK.name,
+                Stage::Lidar => r::LIDAR.name,
+                Stage::Predict => r::PREDICT.name,
+                Stage::Update => r::UPDATE.name,
+                Stage::Send => r::SEND.name,
+            };
+            beamfield_firmware::start_region!(name);
+        }
+        #[cfg(not(feature = "count"))]
+        let _ = stage;
+    }
+
+    fn leave(&mut self, _stage: Stage) {
+        #[cfg(feature = "count")]
+        {
+            beamfield_firmware::bench_mark_end();
+            // SAFETY: re-enables what `enter` masked; no critical section spans the region.
+            #[allow(unsafe_code)]
+            unsafe {
+                cortex_m::interrupt::enable()
+            };
+        }
+    }
+}
+
+/// A ring's consumer end that remembers when it last gave a byte.
+struct Input<'q> {
+    ring: Consumer<'q, u8>,
+    taken: u32,
+}
+
+impl ByteSource for Input<'_> {
+    #[inline]
+    fn next_byte(&mut self) -> Option<u8> {
+        let b = self.ring.dequeue()?;
+        self.taken = self.taken.wrapping_add(1);
+        Some(b)
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let (Some(dp), Some(mut cp)) = (
+        stm32f4::stm32f405::Peripherals::take(),
+        cortex_m::Peripherals::take(),
+    ) else {
+        println!("robot: peripherals taken twice");
+        exit(false)
+    };
+    let Some(store) = cortex_m::singleton!(: beamfield::mcl::Particles<CAPACITY> = beamfield::mcl::Particles::new())
+    else {
+        println!("robot: particle storage taken twice");
+        exit(false)
+    };
+    let (Some(lidar_q), Some(link_q), Some(tx_q)) = (
+        cortex_m::singleton!(: Queue<u8, { ring::LIDAR }> = Queue::new()),
+        cortex_m::singleton!(: Queue<u8, { ring::LINK_IN }> = Queue::new()),
+        cortex_m::singleton!(: Queue<u8, { ring::LINK_OUT }> = Queue::new()),
+    ) else {
+        println!("robot: rings taken twice");
+        exit(false)
+    };
+    let setup = set_up(store);
+    let mut robot = match setup {
+        Ok(r) => r,
+        Err(e) => {
+            println!("robot: setup refused: {}", e);
+            exit(false)
+        }
+    };
+    let seeded = robot.is_initialized();
+
+    let (lidar_p, lidar_c) = lidar_q.split();
+    let (link_p, link_c) = link_q.split();
+    let (tx_p, mut tx_c) = tx_q.split();
+    cortex_m::interrupt::free(|cs| {
+        LIDAR_IN.borrow(cs).replace(Some(lidar_p));
+        LINK_IN.borrow(cs).replace(Some(link_p));
+    });
+    let mut lidar = Input {
+        ring: lidar_c,
+        taken: 0,
+    };
+    let mut link = Input {
+        ring: link_c,
+        taken: 0,
+    };
+    let mut sink = TxSink {
+        ring: tx_p,
+        frames: 0,
+        dropped: 0,
+        saved: 0,
+    };
+
+    serial::enable_clocks_and_pins(&dp.RCC, &dp.GPIOA, &dp.GPIOB);
+    let lines = [
+        serial::setup(regs(Interrupt::USART1), PCLK2_HZ, baud::LIDAR, true, false),
+        serial::setup(
+            regs(Interrupt::USART2),
+            PCLK1_HZ,
+            baud::LINK_IN,
+            true,
+            false,
+        ),
+        serial::setup(
+            regs(Interrupt::USART3),
+            PCLK1_HZ,
+            baud::LINK_OUT,
+            false,
+            true,
+        ),
+    ];
+    if lines.iter().any(|l| l.is_err()) {
+        println!("robot: a baud rate cannot be set from its clock");
+        exit(false)
+    }
+    // 1 ms ticks from the 168 MHz core clock.
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(168_000 - 1);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
+    cp.SYST.enable_interrupt();
+    // SAFETY: the handlers only touch their rings' producer ends and the counters; nothing in
+    // the main loop relies on them being masked.
+    #[allow(unsafe_code)]
+    unsafe {
+        NVIC::unmask(Interrupt::USART1);
+        NVIC::unmask(Interrupt::USART2);
+        cortex_m::interrupt::enable();
+    }
+    drop(dp);
+    println!(
+        "robot: ready: USART1 LD06 in at {} baud (ring {} B), USART2 link in at {} baud (ring {} B), USART3 link out at {} baud; {} of {} particles, {} beams; {}",
+        baud::LIDAR,
+        ring::LIDAR,
+        baud::LINK_IN,
+        ring::LINK_IN,
+        baud::LINK_OUT,
+        robot.config().particles,
+        CAPACITY,
+        BEAMS,
+        if seeded { "seeded from the stored estimate" } else { "waiting for an initial pose" }
+    );
+
+    let mut probe = CountProbe;
+    let (mut last_lidar_ms, mut last_link_ms) = (millis(), millis());
+    let mut last_heartbeat_ms = millis();
+    let (mut lidar_peak, mut link_peak) = (0usize, 0usize);
+    let mut overruns_reported = 0u32;
+    let mut tx_bytes = 0u32;
+    #[cfg(feature = "count")]
+    let mut last_poll_ms = millis();
+    loop {
+        lidar_peak = lidar_peak.max(lidar.ring.len());
+        link_peak = link_peak.max(link.ring.len());
+        #[cfg(feature = "count")]
+        {
+            // Few, large regions: poll once a chunk has arrived or the line went quiet.
+            if lidar.ring.len() < COUNT_CHUNK
+                && millis().wrapping_sub(last_poll_ms) < 20
+                && !link.ring.is_full()
+            {
+                cortex_m::asm::wfi();
+                continue;
+            }
+            last_poll_ms = millis();
+        }
+        let (lidar_before, link_before) = (lidar.taken, link.taken);
+        let progress = robot.poll_probed(&mut lidar, &mut link, &mut sink, &mut probe);
+        let now = millis();
+        if lidar.taken != lidar_before {
+            last_lidar_ms = now;
+        }
+        if link.taken != link_before {
+            last_link_ms = now;
+        }
+        serial::resume(
+            regs(Interrupt::USART1),
+            Interrupt::USART1,
+            lidar.ring.len() < lidar.ring.capacity(),
+            &LIDAR_STATE,
+        );
+        serial::resume(
+            regs(Interrupt::USART2),
+            Interrupt::USART2,
+            link.ring.len() < link.ring.capacity(),
+            &LINK_STATE,
+        );
+        // Bytes the hardware lost (overruns) are drops the computer should hear of.
+        let overruns = LIDAR_STATE
+            .overruns
+            .load(Ordering::Relaxed)
+            .wrapping_add(LINK_STATE.overruns.load(Ordering::Relaxed));
+        if overruns != overruns_reported {
+            robot.add_drops(overruns.wrapping_sub(overruns_reported));
+            overruns_reported = overruns;
+        }
+        // The LiDAR went quiet: heartbeats keep coming, once a second.
+        if now.wrapping_sub(last_lidar_ms) >= STALL_MS
+            && now.wrapping_sub(last_heartbeat_ms) >= STALL_MS
+        {
+            robot.send_heartbeat(&mut sink);
+            last_heartbeat_ms = now;
+        }
+        if progress.processed {
+            last_heartbeat_ms = now;
+        }
+        tx_bytes = tx_bytes.wrapping_add(serial::pump(regs(Interrupt::USART3), &mut tx_c));
+        #[cfg(feature = "emulator")]
+        if now.wrapping_sub(last_lidar_ms) >= EXIT_AFTER_MS
+            && now.wrapping_sub(last_link_ms) >= EXIT_AFTER_MS
+            && !tx_c.ready()
+        {
+            report(&robot, &sink, tx_bytes, (lidar_peak, link_peak), seeded);
+            exit(sink.dropped == 0)
+        }
+        let _ = last_link_ms;
+        if progress.is_idle() && !tx_c.ready() {
+            cortex_m::asm::wfi();
+        }
+    }
+}
+
+/// The localizer over the linked map, with the shared setup and the stored estimate.
+fn set_up(
+    store: &'static mut beamfield::mcl::Particles<CAPACITY>,
+) -> Result<Robot<'static, CAPACITY, BEAMS>, beamfield::Error> {
+    let view = FieldView::parse(BLOB)?;
+    let free = FreeSpace::parse(FREE)?;
+    let layout =
+        robot_plan::layout().map_err(|_| beamfield::Error::Scan(beamfield::ScanError::BadStep))?;
+    let config = robot_plan::config()?;
+    Robot::new(store, view, Some(free), layout, config, SeedStore::load())
+}
+
+/// The run's counters, one line per source (parsed by `cargo xtask robot`).
+fn report(
+    robot: &Robot<'_, CAPACITY, BEAMS>,
+    sink: &TxSink,
+    tx_bytes: u32,
+    peaks: (usize, usize),
+    seeded: bool,
+) {
+    let c = robot.counters();
+    let d = robot.lidar_stats();
+    let a = robot.assembler_stats();
+    let l = robot.link_stats();
+    println!(
+        "robot: lidar in: {} bytes into the ring, peak {} of {} bytes, {} times full, {} overruns, {} line errors; decoder {} bytes, {} frames ok, {} bad checksums, {} bytes skipped; assembler {} points, {} accepted, {} revolutions",
+        LIDAR_STATE.received.load(Ordering::Relaxed),
+        peaks.0,
+        ring::LIDAR,
+        LIDAR_STATE.full.load(Ordering::Relaxed),
+        LIDAR_STATE.overruns.load(Ordering::Relaxed),
+        LIDAR_STATE.line_errors.load(Ordering::Relaxed),
+        d.bytes,
+        d.frames_ok,
+        d.bad_checksum,
+        d.skipped_bytes,
+        a.points,
+        a.accepted,
+        a.revolutions,
+    );
+    println!(
+        "robot: link in: {} bytes into the ring, peak {} of {} bytes, {} times full, {} overruns; decoder {} bytes, {} frames, {} errors ({} bad CRC); {} odometry messages, {} commands carried out, {} refused",
+        LINK_STATE.received.load(Ordering::Relaxed),
+        peaks.1,
+        ring::LINK_IN,
+        LINK_STATE.full.load(Ordering::Relaxed),
+        LINK_STATE.overruns.load(Ordering::Relaxed),
+        l.bytes,
+        l.frames,
+        l.errors(),
+        l.bad_crc,
+        c.odometry,
+        c.commands,
+        c.refused,
+    );
+    println!(
+        "robot: filter: {} revolutions, {} updates, {} skipped, {} with late odometry, {} flagged stale; link out: {} frames ({} bytes), {} dropped for a full ring, {} not encodable; {} estimates saved{}",
+        c.revolutions,
+        c.updates,
+        c.skipped,
+        c.late_odometry,
+        c.stale_odometry,
+        sink.frames,
+        tx_bytes,
+        sink.dropped,
+        c.encode_failures,
+        sink.saved,
+        if seeded { "; started from a stored estimate" } else { "" },
+    );
+}

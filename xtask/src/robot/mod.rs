@@ -1,0 +1,535 @@
+//! `cargo xtask robot`: the host plays the robot around the firmware `robot`
+//! (`firmware/src/bin/robot.rs`) on QEMU's `netduinoplus2`.
+//!
+//! 1. The Intel lab log becomes what a robot sends ([`streams`]): every scan as an LD06
+//!    revolution at 10 Hz into USART1, and into USART2 the wheel encoders at 50 Hz of a
+//!    differential-drive base driven along the logged trajectory with wheels that are not the
+//!    ones the device believes in, plus slip ([`wheels`]), the commands of the plan (an initial
+//!    pose; a global localization with all the particles, then an initial pose that puts it
+//!    right) and bad input on purpose (garbage, a replayed frame, an encoder glitch, a refused
+//!    parameter, a broken CRC).
+//! 2. The device's answers on USART3 are decoded, and the whole run is recomputed on the host
+//!    with the same crate over the same bytes: every estimate must be bit for bit the host's,
+//!    every error report the same, every heartbeat's time, scans and updates the same.
+//! 3. The estimates are compared with the logged poses, and (feature `count`) the instruction
+//!    counts of every stage give the time budget of a revolution.
+
+pub mod streams;
+pub mod wheels;
+
+use crate::cross::build_program;
+use crate::error::{Error, Result};
+use crate::insncount::{qemu_args, Regions};
+use crate::qemu::{ensure_qemu, run_robot, Board};
+use beamfield::field::FreeSpace;
+use beamfield::link::{self, ErrorCode, EstimateFlags, Message};
+use beamfield::robot::{Robot, RobotCounters, Sink, SliceSource};
+use beamfield::{wrap_angle, FieldView, Pose};
+use beamfield_fixtures::regions::robot as regions;
+use beamfield_fixtures::robot_plan::{self, baud, ring, BEAMS, CAPACITY};
+use std::fs;
+use streams::{revolution_time_us, Plan, Streams};
+use wheels::WheelErrors;
+
+const BIN: &str = "robot";
+const READY: &str = "robot: ready";
+/// Seed of the simulated wheels' slip.
+const WHEEL_SEED: u64 = 0x0d0_e7e7;
+/// The kidnap: a global localization commanded before this revolution, and the initial pose
+/// that puts it right this many revolutions later.
+const GLOBAL_AT: usize = 400;
+const RECOVER_AFTER: usize = 30;
+/// Revolutions after the initial pose left out of the tracking figures while the cloud
+/// settles.
+const SETTLE: usize = 10;
+/// QEMU's limit for the whole run, seconds.
+const TIMEOUT_S: u64 = 900;
+
+/// What `cargo xtask robot` is asked to do.
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Scans of the log to send (all by default).
+    pub scans: Option<usize>,
+    /// No kidnap (no global localization, no second initial pose).
+    pub no_kidnap: bool,
+    /// Count instructions per stage (the time budget).
+    pub count: bool,
+    /// Count the receive interrupt handlers instead.
+    pub isr: bool,
+    /// Only the host's run (no QEMU): the streams, the recomputation and the accuracy.
+    pub host_only: bool,
+}
+
+/// Frames sent by the application, in order.
+#[derive(Default)]
+struct Collect(Vec<Message>);
+
+impl Sink for Collect {
+    fn send(&mut self, message: &Message, _wire: &[u8]) {
+        self.0.push(*message);
+    }
+}
+
+fn assets() -> Result<(Vec<u8>, Vec<u8>)> {
+    let dir = crate::process::repo_root().join("firmware/assets");
+    let read = |name: &str| {
+        let p = dir.join(name);
+        fs::read(&p).map_err(|e| Error::io(&p, e))
+    };
+    Ok((read("intel.bin")?, read("intel-free-space.bin")?))
+}
+
+/// The application on the host over the whole streams, as the device runs it.
+fn replay(streams: &Streams, blob: &[u8], free: &[u8]) -> Result<(Vec<Message>, RobotCounters)> {
+    let view = FieldView::parse(blob).map_err(|e| Error::Host(format!("intel.bin: {e}")))?;
+    let free =
+        FreeSpace::parse(free).map_err(|e| Error::Host(format!("intel-free-space.bin: {e}")))?;
+    let layout = robot_plan::layout().map_err(|e| Error::Host(e.into()))?;
+    let config = robot_plan::config().map_err(|e| Error::Host(e.to_string()))?;
+    let mut store = Box::new(beamfield::mcl::Particles::<CAPACITY>::new());
+    let mut robot =
+        Robot::<CAPACITY, BEAMS>::new(&mut store, view, Some(free), layout, config, None)
+            .map_err(|e| Error::Host(format!("robot setup: {e}")))?;
+    let mut sink = Collect::default();
+    let chunks: Option<(usize, usize)> = std::env::var("ROBOT_CHUNKS").ok().and_then(|v| {
+        let (a, b) = v.split_once(',')?;
+        Some((a.parse().ok()?, b.parse().ok()?))
+    });
+    if let Some((lc, kc)) = chunks {
+        let (mut li, mut ki, mut idle) = (0usize, 0usize, 0u32);
+        loop {
+            let mut l = SliceSource::new(&streams.lidar[li..(li + lc).min(streams.lidar.len())]);
+            let mut k = SliceSource::new(&streams.link[ki..(ki + kc).min(streams.link.len())]);
+            let p = robot.poll(&mut l, &mut k, &mut sink);
+            li += l.taken();
+            ki += k.taken();
+            idle = if p.is_idle() { idle + 1 } else { 0 };
+            if idle > 1000 {
+                eprintln!(
+                    "stuck at lidar {li}/{} link {ki}/{}: {:?}",
+                    streams.lidar.len(),
+                    streams.link.len(),
+                    robot.counters()
+                );
+                break;
+            }
+        }
+    } else {
+        let (mut lidar, mut link) = (
+            SliceSource::new(&streams.lidar),
+            SliceSource::new(&streams.link),
+        );
+        loop {
+            let p = robot.poll(&mut lidar, &mut link, &mut sink);
+            if p.is_idle() && lidar.is_empty() && link.is_empty() {
+                break;
+            }
+        }
+    }
+    Ok((sink.0, robot.counters()))
+}
+
+/// What follows from the byte streams alone, one line per frame (estimates as bit patterns).
+fn deterministic(m: &Message) -> String {
+    match m {
+        Message::Estimate(e) => format!(
+            "estimate t={} x={:08x} y={:08x} th={:08x} ess={:08x} flags={:04x} cov={:08x?}",
+            e.timestamp_us,
+            e.pose.x_m.to_bits(),
+            e.pose.y_m.to_bits(),
+            e.pose.theta_rad.to_bits(),
+            e.ess.to_bits(),
+            e.flags.bits(),
+            e.covariance.map(|r| r.map(f32::to_bits)),
+        ),
+        Message::Heartbeat(h) => format!(
+            "heartbeat t={} scans={} updates={}",
+            h.timestamp_us, h.scans, h.updates
+        ),
+        other => format!("{other:?}"),
+    }
+}
+
+/// The device's frames from USART3's bytes.
+fn decode_device(bytes: &[u8]) -> Result<Vec<Message>> {
+    let mut d = link::Decoder::new();
+    let mut out = Vec::new();
+    let mut bad = Vec::new();
+    d.feed(bytes, |f| match f {
+        Ok(f) => out.push(f.message),
+        Err(e) => bad.push(e),
+    });
+    if let Some(e) = bad.first() {
+        return Err(Error::Mismatch(format!(
+            "USART3 carried {} frames the host's decoder refuses (first: {e})",
+            bad.len()
+        )));
+    }
+    Ok(out)
+}
+
+fn errors_of(frames: &[Message]) -> Vec<ErrorCode> {
+    frames
+        .iter()
+        .filter_map(|m| match m {
+            Message::Error(r) => Some(r.code),
+            _ => None,
+        })
+        .collect()
+}
+
+struct Accuracy {
+    scored: usize,
+    rmse_m: f64,
+    rmse_deg: f64,
+    within: f64,
+    max_m: f64,
+    lost_at: Option<usize>,
+    /// During the kidnap: the error at the last revolution before the initial pose, m, and
+    /// whether that estimate was still flagged as a global localization; and the error at the
+    /// first revolution after it, m.
+    kidnap: Option<(f64, bool, f64)>,
+}
+
+/// Tracking error of the estimates against the logged poses, leaving out the revolutions of
+/// the kidnap (from the global localization to `SETTLE` after the initial pose).
+fn accuracy(frames: &[Message], s: &Streams, plan: &Plan) -> Accuracy {
+    let skip = |k: usize| {
+        plan.global_at
+            .is_some_and(|g| k >= g && k < g + plan.recover_after + SETTLE)
+    };
+    let (mut se_t, mut se_h, mut n, mut within, mut max_m) = (0.0, 0.0, 0usize, 0usize, 0.0f64);
+    let mut lost_at = None;
+    let (mut before, mut after) = (None, None);
+    for m in frames {
+        let Message::Estimate(e) = m else { continue };
+        let k = ((e.timestamp_us - revolution_time_us(0)) / streams::REVOLUTION_US) as usize;
+        if let (Some(g), Some(p)) = (plan.global_at, s.truth.get(k)) {
+            let d = f64::from(e.pose.x_m - p.x_m).hypot(f64::from(e.pose.y_m - p.y_m));
+            if k + 1 == g + plan.recover_after {
+                before = Some((d, e.flags.contains(EstimateFlags::GLOBAL_LOCALIZATION)));
+            }
+            if k == g + plan.recover_after {
+                after = Some(d);
+            }
+        }
+        if skip(k) || k >= s.truth.len() {
+            continue;
+        }
+        let p: Pose = s.truth[k];
+        let d = f64::from(e.pose.x_m - p.x_m).hypot(f64::from(e.pose.y_m - p.y_m));
+        let h = f64::from(wrap_angle(e.pose.theta_rad - p.theta_rad))
+            .abs()
+            .to_degrees();
+        se_t += d * d;
+        se_h += h * h;
+        n += 1;
+        within += usize::from(d <= 0.10 && h <= 2.0);
+        max_m = max_m.max(d);
+        if d > 1.0 && lost_at.is_none() {
+            lost_at = Some(k);
+        }
+    }
+    let nn = n.max(1) as f64;
+    Accuracy {
+        scored: n,
+        rmse_m: (se_t / nn).sqrt(),
+        rmse_deg: (se_h / nn).sqrt(),
+        within: within as f64 / nn,
+        max_m,
+        lost_at,
+        kidnap: before.zip(after).map(|((b, f), a)| (b, f, a)),
+    }
+}
+
+pub fn robot(opts: Options) -> Result {
+    let log_path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
+    let log = streams::read_log(&log_path)?;
+    let scans = opts.scans.unwrap_or(log.len()).clamp(2, log.len());
+    let kidnap = !opts.no_kidnap && scans > GLOBAL_AT + RECOVER_AFTER + SETTLE;
+    let plan = Plan {
+        scans,
+        global_at: kidnap.then_some(GLOBAL_AT),
+        recover_after: RECOVER_AFTER,
+    };
+    let s = streams::build(&log, &plan, WheelErrors::TYPICAL, WHEEL_SEED)?;
+    let w = WheelErrors::TYPICAL;
+    println!(
+        "robot: {} Intel scans as {} LD06 revolutions at 10 Hz ({} bytes into USART1); {} wheel-tick messages at 50 Hz from a differential drive with left/right radii x{}/x{}, wheelbase x{} of what the device believes, {} % slip per step and a {} % slip one step in {}, {} commands{}, and bad input ({} garbage bytes, {} replayed frame, {} encoder glitch, {} refused parameter, {} broken CRC): {} bytes into USART2",
+        scans,
+        s.revolutions,
+        s.lidar.len(),
+        s.odometry,
+        w.left_radius_scale,
+        w.right_radius_scale,
+        w.wheelbase_scale,
+        w.slip_sigma * 100.0,
+        w.slip_event_loss * 100.0,
+        (1.0 / w.slip_event_p).round(),
+        s.commands,
+        match plan.global_at {
+            Some(g) => format!(
+                " (initial pose; global localization with {CAPACITY} particles at revolution {g}, the initial pose that puts it right {RECOVER_AFTER} later)"
+            ),
+            None => " (initial pose)".into(),
+        },
+        s.injected.garbage,
+        s.injected.out_of_order,
+        s.injected.out_of_range,
+        s.injected.refused,
+        s.injected.bad_crc,
+        s.link.len()
+    );
+    let (blob, free) = assets()?;
+    let (host, host_counters) = replay(&s, &blob, &free)?;
+    let host_estimates = host
+        .iter()
+        .filter(|m| matches!(m, Message::Estimate(_)))
+        .count();
+    let want_errors: Vec<ErrorCode> = std::iter::empty()
+        .chain(std::iter::repeat_n(
+            ErrorCode::OutOfOrder,
+            s.injected.out_of_order as usize,
+        ))
+        .chain(std::iter::repeat_n(
+            ErrorCode::ValueOutOfRange,
+            s.injected.out_of_range as usize,
+        ))
+        .chain(std::iter::repeat_n(
+            ErrorCode::Refused,
+            s.injected.refused as usize,
+        ))
+        .collect();
+    if errors_of(&host) != want_errors {
+        let got: Vec<&Message> = host
+            .iter()
+            .filter(|m| matches!(m, Message::Error(_)))
+            .collect();
+        return Err(Error::Requirement(format!(
+            "the plan's bad input must be answered {want_errors:?}; the application answered {} error reports (first ten: {:?})",
+            got.len(),
+            &got[..got.len().min(10)]
+        )));
+    }
+    if host_counters.late_odometry != 0 {
+        return Err(Error::Requirement(format!(
+            "the host's replay had {} revolutions with late odometry: the streams are out of step",
+            host_counters.late_odometry
+        )));
+    }
+    println!(
+        "host replay: {} revolutions, {} updates ({} skipped), {} estimates, {} error reports ({:?}), odometry {} accepted",
+        host_counters.revolutions,
+        host_counters.updates,
+        host_counters.skipped,
+        host_estimates,
+        want_errors.len(),
+        want_errors,
+        host_counters.odometry,
+    );
+
+    let frames = if opts.host_only {
+        host.clone()
+    } else {
+        let device = run_device(&opts, &s)?;
+        compare(&host, &device)?;
+        device
+    };
+    let a = accuracy(&frames, &s, &plan);
+    let flagged_global = frames
+        .iter()
+        .filter(|m| matches!(m, Message::Estimate(e) if e.flags.contains(EstimateFlags::GLOBAL_LOCALIZATION)))
+        .count();
+    println!(
+        "accuracy against the logged poses ({} estimates{}): RMSE {:.2} cm, {:.3} deg; within 10 cm and 2 deg {:.1} %; largest error {:.3} m; {}",
+        a.scored,
+        if kidnap {
+            format!(
+                ", leaving out the {} revolutions from the global localization to {SETTLE} after the initial pose; {flagged_global} estimates flagged global localization",
+                RECOVER_AFTER + SETTLE
+            )
+        } else {
+            String::new()
+        },
+        a.rmse_m * 100.0,
+        a.rmse_deg,
+        a.within * 100.0,
+        a.max_m,
+        match a.lost_at {
+            Some(k) => format!("LOST (error over 1 m) from revolution {k}"),
+            None => "never lost".into(),
+        }
+    );
+    if let (Some(g), Some((before, flagged, after))) = (plan.global_at, a.kidnap) {
+        println!(
+            "kidnap: the global localization from revolution {g} with {CAPACITY} particles was {before:.2} m off {RECOVER_AFTER} revolutions later ({}); the initial pose sent then put the estimate {:.1} cm from the logged pose at the next revolution",
+            if flagged { "still flagged global localization" } else { "narrowed to one place, no longer flagged: not a correctness signal" },
+            after * 100.0
+        );
+    }
+    if a.lost_at.is_some() {
+        return Err(Error::Requirement("the device lost the robot".into()));
+    }
+    Ok(())
+}
+
+fn run_device(opts: &Options, s: &Streams) -> Result<Vec<Message>> {
+    ensure_qemu()?;
+    let mut features = vec!["emulator"];
+    if opts.count {
+        features.push("count");
+    }
+    if opts.isr {
+        features.push("count-isr");
+    }
+    let elf = build_program(Board::Netduinoplus2, BIN, &features)?;
+    let extra = if opts.count || opts.isr {
+        qemu_args(&elf, ", or run `cargo xtask robot` without --count")?
+    } else {
+        Vec::new()
+    };
+    let run = run_robot(&elf, READY, &s.lidar, &s.link, &extra, TIMEOUT_S)?;
+    let out = &run.finished;
+    for l in out.stdout.lines().filter(|l| l.starts_with("robot: ")) {
+        println!("device {l}");
+    }
+    if out.code != 0 {
+        eprint!("{}", out.stderr);
+        return Err(crate::qemu::failure(
+            out.code,
+            "`robot`",
+            "netduinoplus2",
+            "see its output",
+        ));
+    }
+    let device = decode_device(&run.usart3)?;
+    println!(
+        "link out: {} bytes on USART3, {} frames ({} estimates, {} heartbeats, {} error reports), {:.1} s in QEMU",
+        run.usart3.len(),
+        device.len(),
+        device.iter().filter(|m| matches!(m, Message::Estimate(_))).count(),
+        device.iter().filter(|m| matches!(m, Message::Heartbeat(_))).count(),
+        device.iter().filter(|m| matches!(m, Message::Error(_))).count(),
+        run.elapsed.as_secs_f64()
+    );
+    if opts.count {
+        budget(&Regions::read(&out.stdout, &out.stderr)?, s)?;
+    }
+    if opts.isr {
+        isr(&out.stderr, s)?;
+    }
+    Ok(device)
+}
+
+/// Every estimate and error report, and every heartbeat's time, scans and updates, equal; the
+/// device may add heartbeats at the end (sent while its lines were silent).
+fn compare(host: &[Message], device: &[Message]) -> Result {
+    let h: Vec<String> = host.iter().map(deterministic).collect();
+    let d: Vec<String> = device.iter().map(deterministic).collect();
+    if let Some(i) = (0..h.len()).find(|&i| d.get(i) != h.get(i)) {
+        return Err(Error::Mismatch(format!(
+            "frame {i} differs: the host computed\n  {}\nthe device sent\n  {}",
+            h[i],
+            d.get(i).map_or("(nothing)", String::as_str)
+        )));
+    }
+    let extra = &device[h.len()..];
+    if extra.iter().any(|m| !matches!(m, Message::Heartbeat(_))) {
+        return Err(Error::Mismatch(format!(
+            "the device sent {} frames after the host's last, not all heartbeats",
+            extra.len()
+        )));
+    }
+    let estimates = host
+        .iter()
+        .filter(|m| matches!(m, Message::Estimate(_)))
+        .count();
+    let errors = host
+        .iter()
+        .filter(|m| matches!(m, Message::Error(_)))
+        .count();
+    let heartbeats = host.len() - estimates - errors;
+    println!(
+        "device = host: all {estimates} estimates bit for bit (time, pose, covariance, ESS, flags), all {errors} error reports, all {heartbeats} heartbeats' time, scans and updates; then {} heartbeats of the silent line at the end",
+        extra.len()
+    );
+    Ok(())
+}
+
+/// Instructions per revolution by stage against 100 ms at 168 MHz.
+fn budget(r: &Regions, s: &Streams) -> Result {
+    r.expect(&regions::ALL)?;
+    let revs = s.revolutions as f64;
+    let core_hz = Board::Netduinoplus2.core_hz() as f64;
+    let budget = core_hz * 0.1;
+    println!("time budget (QEMU plugin, exact counts; 168 MHz at 1 cycle per instruction, so 16.8 M instructions per 100 ms revolution):");
+    let mut total = 0.0;
+    let rows = [
+        (regions::LIDAR, s.lidar.len() as f64, "byte"),
+        (regions::LINK, s.link.len() as f64, "byte"),
+        (regions::PREDICT, revs, "revolution"),
+        (regions::UPDATE, revs, "revolution"),
+        (regions::SEND, revs, "revolution"),
+    ];
+    for (region, per, unit) in rows {
+        let (sum, times) = r.sum(region.name);
+        let per_rev = sum as f64 / revs;
+        total += per_rev;
+        println!(
+            "  {:<28} {:>12} in {:>6} regions: {:>9.1} per {unit}, {:>10.0} per revolution ({:.2} % of the budget), longest region {}",
+            region.what,
+            sum,
+            times,
+            sum as f64 / per,
+            per_rev,
+            per_rev / budget * 100.0,
+            r.max(region.name)
+        );
+    }
+    println!(
+        "  total {:.0} instructions per revolution on average = {:.2} ms at 168 MHz ({:.1} % of 100 ms)",
+        total,
+        total / core_hz * 1e3,
+        total / budget * 100.0
+    );
+    // The longest update, and what the LiDAR's line brings meanwhile.
+    let longest = r.max(regions::UPDATE.name) + r.max(regions::PREDICT.name);
+    let line_bytes_per_s = f64::from(baud::LIDAR) / 10.0;
+    let arrive = longest as f64 / core_hz * line_bytes_per_s;
+    println!(
+        "  the longest predict + update ({} instructions, {:.2} ms) lets {:.0} bytes arrive at {} baud (8N1, the line full); the ring holds {} bytes",
+        longest,
+        longest as f64 / core_hz * 1e3,
+        arrive,
+        baud::LIDAR,
+        ring::LIDAR
+    );
+    if arrive >= ring::LIDAR as f64 {
+        return Err(Error::Requirement(format!(
+            "the LiDAR ring ({} bytes) is smaller than what arrives during the longest update ({arrive:.0} bytes)",
+            ring::LIDAR
+        )));
+    }
+    Ok(())
+}
+
+/// The receive handlers' counts (feature `count-isr`: every run of a handler is a region).
+fn isr(stderr: &str, s: &Streams) -> Result {
+    let counts = crate::insncount::region_counts(stderr);
+    if counts.is_empty() {
+        return Err(Error::Output(
+            "the plugin counted no interrupt handler".into(),
+        ));
+    }
+    let max = counts.iter().max().copied().unwrap_or(0);
+    let sum: u64 = counts.iter().sum();
+    let bytes = (s.lidar.len() + s.link.len()) as f64;
+    println!(
+        "receive interrupt handlers: {} runs for {} bytes, {:.1} instructions per run on average, longest {} (plus the exception entry and return, done by the hardware: 12 cycles each on a Cortex-M4)",
+        counts.len(),
+        bytes,
+        sum as f64 / counts.len() as f64,
+        max
+    );
+    Ok(())
+}
