@@ -6,8 +6,9 @@
 //! the module, so the two sides cannot disagree on an offset.
 
 use super::{
-    crc8, field, u16_at, Ld06Error, FRAME_LEN, FULL_TURN_CDEG, HEADER, MAX_SPEED_DEG_PER_S,
-    MIN_SPEED_DEG_PER_S, POINTS_PER_FRAME, SAMPLE_RATE_FLOOR_HZ, TIMESTAMP_WRAP_MS, VER_LEN,
+    crc8, crc8_frame, field, u16_at, Ld06Error, FRAME_LEN, FULL_TURN_CDEG, HEADER,
+    MAX_SPEED_DEG_PER_S, MIN_SPEED_DEG_PER_S, POINTS_PER_FRAME, SAMPLE_RATE_FLOOR_HZ,
+    TIMESTAMP_WRAP_MS, VER_LEN,
 };
 use crate::lidar::{range_units, room, EncodeError, LidarPoint};
 use crate::wire;
@@ -97,7 +98,7 @@ impl Ld06Frame {
     /// exactly these.
     #[inline(always)]
     pub(super) fn check(b: &[u8; FRAME_LEN]) -> Result<(), Ld06Error> {
-        let computed = crc8(b.get(field::CHECKED).unwrap_or(&[]));
+        let computed = crc8_frame(b);
         let carried = b[field::CRC];
         if computed != carried {
             return Err(Ld06Error::BadChecksum { carried, computed });
@@ -140,22 +141,27 @@ impl Ld06Frame {
     /// Reads the fields without any check.
     #[inline(always)]
     pub(super) fn fields(b: &[u8; FRAME_LEN]) -> Self {
+        let mut f = Self::default();
+        f.read_fields(b);
+        f
+    }
+
+    /// Overwrites every field with the frame's, without any check: in place, so that the
+    /// decoder's kept frame is not built aside and then copied.
+    #[inline(always)]
+    pub(super) fn read_fields(&mut self, b: &[u8; FRAME_LEN]) {
         use field::sample;
-        let mut samples = [Ld06Sample::default(); POINTS_PER_FRAME];
         let raw = b.get(field::SAMPLES).unwrap_or(&[]);
-        for (s, c) in samples.iter_mut().zip(raw.chunks_exact(sample::LEN)) {
+        for (s, c) in self.samples.iter_mut().zip(raw.chunks_exact(sample::LEN)) {
             *s = Ld06Sample {
                 distance_mm: wire::get_u16(c, sample::DISTANCE),
                 intensity: c.get(sample::INTENSITY).copied().unwrap_or(0),
             };
         }
-        Self {
-            speed_deg_per_s: u16_at(b, field::SPEED),
-            start_angle_cdeg: u16_at(b, field::START_ANGLE),
-            samples,
-            end_angle_cdeg: u16_at(b, field::END_ANGLE),
-            timestamp_ms: u16_at(b, field::TIMESTAMP),
-        }
+        self.speed_deg_per_s = u16_at(b, field::SPEED);
+        self.start_angle_cdeg = u16_at(b, field::START_ANGLE);
+        self.end_angle_cdeg = u16_at(b, field::END_ANGLE);
+        self.timestamp_ms = u16_at(b, field::TIMESTAMP);
     }
 
     /// Writes the frame, CRC included, into `out[..FRAME_LEN]`; returns [`FRAME_LEN`].
