@@ -33,8 +33,7 @@ fn judge(
     match Ld06Frame::check(frame) {
         Ok(()) => {
             let kept = last.get_or_insert_with(Ld06Frame::default);
-            kept.read_fields(frame);
-            kept.points(on_point);
+            kept.read_fields_and_points(frame, on_point);
             Verdict::Accept {
                 points: POINTS_PER_FRAME as u32,
             }
