@@ -237,9 +237,10 @@ impl<const LEN: usize, H: Header> HeaderHunt<LEN, H> {
         }
     }
 
-    /// Feeds bytes of a stream of `LEN`-byte frames: the header byte by byte, then the rest of
-    /// the frame copied in one block; each whole frame is `judge`d and its verdict settled. The
-    /// same outcome as [`HeaderHunt::push_frame_byte`] for each byte in turn.
+    /// Feeds bytes of a stream of `LEN`-byte frames: a whole frame that starts where a frame
+    /// may start is judged in place; otherwise the header byte by byte, then the rest of the
+    /// frame copied in one block; each whole frame is `judge`d and its verdict settled. The same
+    /// outcome as [`HeaderHunt::push_frame_byte`] for each byte in turn.
     #[inline]
     pub(crate) fn feed_frames(
         &mut self,
@@ -248,6 +249,26 @@ impl<const LEN: usize, H: Header> HeaderHunt<LEN, H> {
     ) {
         let mut rest = bytes;
         while !rest.is_empty() {
+            if self.len == 0 {
+                // A whole frame that opens right here is judged where it lies, not copied: the
+                // same counts and the same state as taking its bytes one by one.
+                if let Some((frame, tail)) = rest.split_first_chunk::<LEN>() {
+                    if matches!(frame.as_slice(), [a, b, ..] if *a == H::FIRST && H::second(*b)) {
+                        self.counter.fed(LEN);
+                        let verdict = judge(frame);
+                        if verdict.consumes_frame() {
+                            self.counter.count(verdict);
+                        } else {
+                            // Rejected: the buffer's re-hunt looks for the next header inside.
+                            self.buf = *frame;
+                            self.len = LEN;
+                            self.settle(verdict);
+                        }
+                        rest = tail;
+                        continue;
+                    }
+                }
+            }
             if self.len >= 2 {
                 let take = LEN.saturating_sub(self.len).min(rest.len());
                 let (head, tail) = rest.split_at(take);

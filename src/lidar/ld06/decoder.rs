@@ -32,7 +32,8 @@ fn judge(
 ) -> Verdict {
     match Ld06Frame::check(frame) {
         Ok(()) => {
-            last.insert(Ld06Frame::fields(frame)).points(on_point);
+            let kept = last.get_or_insert_with(Ld06Frame::default);
+            kept.read_fields_and_points(frame, on_point);
             Verdict::Accept {
                 points: POINTS_PER_FRAME as u32,
             }

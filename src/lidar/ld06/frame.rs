@@ -6,8 +6,9 @@
 //! the module, so the two sides cannot disagree on an offset.
 
 use super::{
-    crc8, field, u16_at, Ld06Error, FRAME_LEN, FULL_TURN_CDEG, HEADER, MAX_SPEED_DEG_PER_S,
-    MIN_SPEED_DEG_PER_S, POINTS_PER_FRAME, SAMPLE_RATE_FLOOR_HZ, TIMESTAMP_WRAP_MS, VER_LEN,
+    crc8, crc8_frame, field, u16_at, Ld06Error, FRAME_LEN, FULL_TURN_CDEG, HEADER,
+    MAX_SPEED_DEG_PER_S, MIN_SPEED_DEG_PER_S, POINTS_PER_FRAME, SAMPLE_RATE_FLOOR_HZ,
+    TIMESTAMP_WRAP_MS, VER_LEN,
 };
 use crate::lidar::{range_units, room, EncodeError, LidarPoint};
 use crate::wire;
@@ -97,7 +98,7 @@ impl Ld06Frame {
     /// exactly these.
     #[inline(always)]
     pub(super) fn check(b: &[u8; FRAME_LEN]) -> Result<(), Ld06Error> {
-        let computed = crc8(b.get(field::CHECKED).unwrap_or(&[]));
+        let computed = crc8_frame(b);
         let carried = b[field::CRC];
         if computed != carried {
             return Err(Ld06Error::BadChecksum { carried, computed });
@@ -140,21 +141,50 @@ impl Ld06Frame {
     /// Reads the fields without any check.
     #[inline(always)]
     pub(super) fn fields(b: &[u8; FRAME_LEN]) -> Self {
+        let mut f = Self::default();
+        f.read_fields(b);
+        f
+    }
+
+    /// Overwrites every field with the frame's, without any check: in place, so that the
+    /// decoder's kept frame is not built aside and then copied.
+    #[inline(always)]
+    pub(super) fn read_fields(&mut self, b: &[u8; FRAME_LEN]) {
         use field::sample;
-        let mut samples = [Ld06Sample::default(); POINTS_PER_FRAME];
         let raw = b.get(field::SAMPLES).unwrap_or(&[]);
-        for (s, c) in samples.iter_mut().zip(raw.chunks_exact(sample::LEN)) {
+        for (s, c) in self.samples.iter_mut().zip(raw.chunks_exact(sample::LEN)) {
             *s = Ld06Sample {
                 distance_mm: wire::get_u16(c, sample::DISTANCE),
                 intensity: c.get(sample::INTENSITY).copied().unwrap_or(0),
             };
         }
-        Self {
-            speed_deg_per_s: u16_at(b, field::SPEED),
-            start_angle_cdeg: u16_at(b, field::START_ANGLE),
-            samples,
-            end_angle_cdeg: u16_at(b, field::END_ANGLE),
-            timestamp_ms: u16_at(b, field::TIMESTAMP),
+        self.speed_deg_per_s = u16_at(b, field::SPEED);
+        self.start_angle_cdeg = u16_at(b, field::START_ANGLE);
+        self.end_angle_cdeg = u16_at(b, field::END_ANGLE);
+        self.timestamp_ms = u16_at(b, field::TIMESTAMP);
+    }
+
+    /// [`Ld06Frame::read_fields`] then [`Ld06Frame::points`], in one pass over the samples:
+    /// each is read from the frame's bytes, kept and handed over at once (the decoder's path).
+    #[inline(always)]
+    pub(super) fn read_fields_and_points(
+        &mut self,
+        b: &[u8; FRAME_LEN],
+        on_point: &mut impl FnMut(LidarPoint),
+    ) {
+        use field::sample;
+        self.speed_deg_per_s = u16_at(b, field::SPEED);
+        self.start_angle_cdeg = u16_at(b, field::START_ANGLE);
+        self.end_angle_cdeg = u16_at(b, field::END_ANGLE);
+        self.timestamp_ms = u16_at(b, field::TIMESTAMP);
+        let mut angle = AngleSteps::new(self.start_angle_cdeg, self.span_cdeg());
+        let raw = b.get(field::SAMPLES).unwrap_or(&[]);
+        for (s, c) in self.samples.iter_mut().zip(raw.chunks_exact(sample::LEN)) {
+            *s = Ld06Sample {
+                distance_mm: wire::get_u16(c, sample::DISTANCE),
+                intensity: c.get(sample::INTENSITY).copied().unwrap_or(0),
+            };
+            on_point(angle.point(*s, self.timestamp_ms));
         }
     }
 
@@ -203,23 +233,9 @@ impl Ld06Frame {
     /// with the angle stepped instead of recomputed.
     #[inline]
     pub fn points(&self, on_point: &mut impl FnMut(LidarPoint)) {
-        let step = POINTS_PER_FRAME as u32 - 1;
-        let full = u32::from(FULL_TURN_CDEG) * step;
-        let span = u32::from(self.span_cdeg());
-        let mut a = u32::from(self.start_angle_cdeg) * step;
-        let scale = 1.0 / (100.0 * step as f32);
+        let mut angle = AngleSteps::new(self.start_angle_cdeg, self.span_cdeg());
         for s in &self.samples {
-            on_point(LidarPoint {
-                angle_cw_deg: a as f32 * scale,
-                range_m: f32::from(s.distance_mm) * 0.001,
-                quality: u16::from(s.intensity),
-                valid: s.distance_mm != 0,
-                timestamp_ms: Some(self.timestamp_ms),
-            });
-            a += span;
-            if a >= full {
-                a -= full;
-            }
+            on_point(angle.point(*s, self.timestamp_ms));
         }
     }
 
@@ -244,6 +260,47 @@ impl Ld06Frame {
             valid: s.distance_mm != 0,
             timestamp_ms: Some(self.timestamp_ms),
         }
+    }
+}
+
+/// The angles of a frame's points, stepped from the start angle: in integers of 1/1,100 degree
+/// (`start · 11 + span · i`, reduced modulo 360°), converted once per point.
+struct AngleSteps {
+    /// The next point's angle, 1/1,100 degree, below `FULL`.
+    a: u32,
+    /// The span of the frame, hundredths of a degree (the step in 1/1,100 degree).
+    span: u32,
+}
+
+impl AngleSteps {
+    /// Steps between the first and the last point.
+    const STEPS: u32 = POINTS_PER_FRAME as u32 - 1;
+    /// A full turn, 1/1,100 degree.
+    const FULL: u32 = FULL_TURN_CDEG as u32 * Self::STEPS;
+
+    #[inline(always)]
+    fn new(start_cdeg: u16, span_cdeg: u16) -> Self {
+        Self {
+            a: u32::from(start_cdeg) * Self::STEPS,
+            span: u32::from(span_cdeg),
+        }
+    }
+
+    /// The point of sample `s` at the current angle; steps to the next angle.
+    #[inline(always)]
+    fn point(&mut self, s: Ld06Sample, timestamp_ms: u16) -> LidarPoint {
+        let p = LidarPoint {
+            angle_cw_deg: self.a as f32 * (1.0 / (100.0 * Self::STEPS as f32)),
+            range_m: f32::from(s.distance_mm) * 0.001,
+            quality: u16::from(s.intensity),
+            valid: s.distance_mm != 0,
+            timestamp_ms: Some(timestamp_ms),
+        };
+        self.a += self.span;
+        if self.a >= Self::FULL {
+            self.a -= Self::FULL;
+        }
+        p
     }
 }
 

@@ -34,6 +34,24 @@ fn crc_matches_bitwise_definition_and_published_table_entries() {
     }
 }
 
+#[test]
+fn crc_table_matches_the_crc_crate_and_the_frame_check_matches_crc8() {
+    let reference = crc::Crc::<u8>::new(&CRC_8_LD06);
+    for len in 0..64u8 {
+        let v: Vec<u8> = (0..len).map(|i| i.wrapping_mul(91) ^ 0x3C).collect();
+        assert_eq!(crc8(&v), reference.checksum(&v));
+    }
+    for b in 0..=255u8 {
+        assert_eq!(crc8(&[b]), reference.checksum(&[b]));
+    }
+    for seed in 0..200u32 {
+        let frame: [u8; FRAME_LEN] = core::array::from_fn(|i| {
+            (seed.wrapping_mul(2_654_435_761) >> (i % 24)) as u8 ^ i as u8
+        });
+        assert_eq!(crc8_frame(&frame), crc8(&frame[..46]));
+    }
+}
+
 fn sample_frame() -> Ld06Frame {
     let mut samples = [Ld06Sample::default(); 12];
     for (i, s) in samples.iter_mut().enumerate() {
@@ -140,6 +158,54 @@ fn block_feed_equals_byte_feed_and_points_equal_point() {
         assert_eq!(got, want, "pieces of {piece}");
         assert_eq!(a.stats(), b.stats());
         assert_eq!(a.buffered(), b.buffered());
+    }
+}
+
+/// Frames judged where they lie in the fed slice (the block path) and frames assembled byte by
+/// byte agree on every point, counter and kept frame, whatever the verdicts.
+#[test]
+fn block_feed_equals_byte_feed_for_every_verdict() {
+    let good = frame_bytes(&sample_frame());
+    let mut bad_crc = good;
+    bad_crc[20] ^= 0x10;
+    let out_of_range = frame_bytes(&with(3600, 36_000, 100));
+    let implausible = frame_bytes(&with(3600, 0, 20_000));
+    let mut stream = Vec::new();
+    for (k, f) in [
+        good,
+        bad_crc,
+        good,
+        out_of_range,
+        implausible,
+        good,
+        good,
+        bad_crc,
+    ]
+    .iter()
+    .enumerate()
+    {
+        stream.extend_from_slice(f);
+        if k % 3 == 1 {
+            // A header candidate inside garbage between frames.
+            stream.extend_from_slice(&[0x54, 0x2C, 0x00, 0x54]);
+        }
+    }
+    stream.extend_from_slice(&good[..30]);
+    for piece in [1usize, 3, 46, 47, 48, 94, 95, 1000] {
+        let mut a = Ld06Decoder::new();
+        let mut got = Vec::new();
+        for c in stream.chunks(piece) {
+            a.feed(c, |p| got.push(p));
+        }
+        let mut b = Ld06Decoder::new();
+        let mut want = Vec::new();
+        for &x in &stream {
+            b.push_byte(x, &mut |p| want.push(p));
+        }
+        assert_eq!(got, want, "pieces of {piece}");
+        assert_eq!(a.stats(), b.stats(), "pieces of {piece}");
+        assert_eq!(a.buffered(), b.buffered(), "pieces of {piece}");
+        assert_eq!(a.last_frame(), b.last_frame(), "pieces of {piece}");
     }
 }
 
