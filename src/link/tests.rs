@@ -415,9 +415,9 @@ fn out_of_range_values_are_refused_at_their_offset() {
     assert_eq!(with(5, 11, &f(-0.0)), Some(11));
     assert_eq!(with(5, 1, &[0, 0]), Some(1));
     assert_eq!(with(5, 7, &f(-0.1)), Some(7));
-    // Error: codes 0 and 7.
+    // Error: codes 0 and 8.
     assert_eq!(with(8, 0, &[0]), Some(0));
-    assert_eq!(with(8, 0, &[7]), Some(0));
+    assert_eq!(with(8, 0, &[8]), Some(0));
     // Valid edges pass.
     assert_eq!(with(0, 16, &f(core::f32::consts::PI)), None);
     assert_eq!(with(6, 56, &f(0.0)), None);

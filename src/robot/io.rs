@@ -10,6 +10,10 @@ pub trait ByteSource {
     fn next_byte(&mut self) -> Option<u8>;
 }
 
+/// On targets with atomic compare-and-swap (the Cortex-M3/M4/M7 and larger; `heapless` also
+/// provides its ring on some targets with atomic loads and stores only, for which this
+/// implementation is not compiled: wrap the consumer in a type of your own there).
+#[cfg(target_has_atomic = "ptr")]
 impl ByteSource for heapless::spsc::Consumer<'_, u8> {
     #[inline]
     fn next_byte(&mut self) -> Option<u8> {

@@ -11,7 +11,7 @@
 //!
 //! Features: `count` marks the stages of every poll for the instruction counter (interrupts
 //! masked inside each counted region, so the counts are exact, and the main loop waits for a
-//! chunk of bytes before it polls, so the regions stay few); `count-isr` marks every run of the
+//! chunk of bytes (or 500 ms) before it polls, so the regions stay few); `count-isr` marks every run of the
 //! receive interrupt handlers instead; `emulator` ends the program (semihosting exit) once the
 //! LiDAR has been silent for [`EXIT_AFTER_MS`], printing the counters.
 #![no_std]
@@ -31,6 +31,9 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::NVIC;
 use cortex_m_rt::{entry, exception};
 use heapless::spsc::{Consumer, Producer, Queue};
+#[cfg(feature = "defmt")]
+use panic_probe as _;
+#[cfg(not(feature = "defmt"))]
 use panic_semihosting as _;
 use stm32f4::stm32f405::{usart1::RegisterBlock, Interrupt, USART1, USART2, USART3};
 
@@ -42,9 +45,9 @@ static FREE: &[u8] = include_bytes!("../../assets/intel-free-space.bin");
 /// Silence on the LiDAR line after which a heartbeat goes out every second, ms.
 const STALL_MS: u32 = 1_000;
 /// With the feature `emulator`: silence on both input lines after which the program ends, ms.
+#[cfg(feature = "emulator")]
 const EXIT_AFTER_MS: u32 = 3_000;
-/// With the feature `count`: LiDAR bytes the main loop waits for before it polls (or 20 ms of
-/// silence).
+/// With the feature `count`: LiDAR bytes the main loop waits for before it polls (or 500 ms).
 #[cfg(feature = "count")]
 const COUNT_CHUNK: usize = 1024;
 
@@ -348,7 +351,6 @@ fn main() -> ! {
         NVIC::unmask(Interrupt::USART2);
         cortex_m::interrupt::enable();
     }
-    drop(dp);
     println!(
         "robot: ready: USART1 LD06 in at {} baud (ring {} B), USART2 link in at {} baud (ring {} B), USART3 link out at {} baud; {} of {} particles, {} beams; {}",
         baud::LIDAR,
@@ -377,8 +379,8 @@ fn main() -> ! {
         {
             // Few, large regions: poll once a chunk has arrived or the line went quiet.
             if lidar.ring.len() < COUNT_CHUNK
-                && millis().wrapping_sub(last_poll_ms) < 20
-                && !link.ring.is_full()
+                && millis().wrapping_sub(last_poll_ms) < 500
+                && link.ring.len() < link.ring.capacity()
             {
                 cortex_m::asm::wfi();
                 continue;
@@ -453,7 +455,8 @@ fn set_up(
     Robot::new(store, view, Some(free), layout, config, SeedStore::load())
 }
 
-/// The run's counters, one line per source (parsed by `cargo xtask robot`).
+/// The run's counters, one line per source (printed by `cargo xtask robot`).
+#[cfg(feature = "emulator")]
 fn report(
     robot: &Robot<'_, CAPACITY, BEAMS>,
     sink: &TxSink,

@@ -492,6 +492,13 @@ fn budget(r: &Regions, s: &Streams) -> Result {
         total / core_hz * 1e3,
         total / budget * 100.0
     );
+    let (update, _) = r.sum(regions::UPDATE.name);
+    println!(
+        "  update per particle: {:.0} instructions on average ({} particles, {BEAMS} beams); the longest update (the global localization's {CAPACITY} particles) {:.0} per particle",
+        update as f64 / revs / robot_plan::PARTICLES as f64,
+        robot_plan::PARTICLES,
+        r.max(regions::UPDATE.name) as f64 / CAPACITY as f64
+    );
     // The longest update, and what the LiDAR's line brings meanwhile.
     let longest = r.max(regions::UPDATE.name) + r.max(regions::PREDICT.name);
     let line_bytes_per_s = f64::from(baud::LIDAR) / 10.0;

@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use beamfield::lidar::ld06::{self, Ld06Sample};
 use beamfield::link::{Encoder, Message, SetInitialPose, SetParameters, WheelTicks, MAX_WIRE_LEN};
 use beamfield::{wrap_angle, Pose};
-use beamfield_fixtures::robot_plan::{BEAMS, CAPACITY, MAX_RANGE_M, PARTICLES};
+use beamfield_fixtures::robot_plan::{BEAMS, CAPACITY, PARTICLES};
 use std::path::Path;
 
 /// LD06 points per revolution (one per degree) and the rotation speed written into the frames
@@ -150,7 +150,7 @@ pub fn build(log: &[LogScan], plan: &Plan, errors: WheelErrors, seed: u64) -> Re
     for (k, s) in scans.iter().enumerate() {
         let samples: Vec<Ld06Sample> = (0..SAMPLES)
             .map(|cw| match beam_at(cw).map(|i| s.ranges_m[i]) {
-                Some(r) if r < MAX_RANGE_M && r <= 65.535 => Ld06Sample::from_range_m(r, INTENSITY),
+                Some(r) if r <= 65.535 => Ld06Sample::from_range_m(r, INTENSITY),
                 _ => Ld06Sample::default(),
             })
             .collect();
