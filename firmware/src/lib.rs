@@ -12,6 +12,7 @@
 #[rustfmt::skip]
 pub mod fixed_cases;
 pub mod reference_cases;
+#[cfg(target_has_atomic = "32")]
 pub mod serial;
 pub mod size_program;
 pub mod usart;
