@@ -193,25 +193,7 @@ pub fn run_with_uart(
     let read = |p: &Path| fs::read_to_string(p).unwrap_or_default();
 
     // The ready line, or QEMU's end, or the deadline.
-    loop {
-        if read(&out_p).lines().any(|l| l.starts_with(ready)) {
-            break;
-        }
-        let exited = guard
-            .0
-            .as_mut()
-            .and_then(|c| c.try_wait().ok().flatten())
-            .is_some();
-        if exited || started.elapsed() > Duration::from_secs(READY_TIMEOUT_S) {
-            let why = if exited { "QEMU exited" } else { "timed out" };
-            return Err(Error::Qemu(format!(
-                "{why} before the firmware's ready line:\n{}{}",
-                read(&out_p),
-                read(&err_p)
-            )));
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    wait_ready(&mut guard, &out_p, &err_p, ready, started)?;
     eprintln!(
         "xtask: firmware ready after {:.1} s; sending {} bytes into USART1",
         started.elapsed().as_secs_f64(),
@@ -261,6 +243,37 @@ pub fn run_with_uart(
         },
         elapsed,
     })
+}
+
+/// Waits until the program's stdout file `out_p` has a line starting with `ready`; an error
+/// when QEMU exits or [`READY_TIMEOUT_S`] passes first (with what it printed).
+fn wait_ready(
+    guard: &mut Guard,
+    out_p: &Path,
+    err_p: &Path,
+    ready: &str,
+    started: Instant,
+) -> Result {
+    let read = |p: &Path| fs::read_to_string(p).unwrap_or_default();
+    loop {
+        if read(out_p).lines().any(|l| l.starts_with(ready)) {
+            return Ok(());
+        }
+        let exited = guard
+            .0
+            .as_mut()
+            .and_then(|c| c.try_wait().ok().flatten())
+            .is_some();
+        if exited || started.elapsed() > Duration::from_secs(READY_TIMEOUT_S) {
+            let why = if exited { "QEMU exited" } else { "timed out" };
+            return Err(Error::Qemu(format!(
+                "{why} before the firmware's ready line:\n{}{}",
+                read(out_p),
+                read(err_p)
+            )));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
 
 /// A run of the robot application: what it printed, what it sent on USART3, how long it took.
@@ -336,25 +349,7 @@ pub fn run_robot(
     let child = cmd.spawn().map_err(|e| spawn_error(&cmd, e))?;
     let mut guard = Guard(Some(child));
     let read = |p: &Path| fs::read_to_string(p).unwrap_or_default();
-    loop {
-        if read(&out_p).lines().any(|l| l.starts_with(ready)) {
-            break;
-        }
-        let exited = guard
-            .0
-            .as_mut()
-            .and_then(|c| c.try_wait().ok().flatten())
-            .is_some();
-        if exited || started.elapsed() > Duration::from_secs(READY_TIMEOUT_S) {
-            let why = if exited { "QEMU exited" } else { "timed out" };
-            return Err(Error::Qemu(format!(
-                "{why} before the firmware's ready line:\n{}{}",
-                read(&out_p),
-                read(&err_p)
-            )));
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    wait_ready(&mut guard, &out_p, &err_p, ready, started)?;
     eprintln!(
         "xtask: firmware ready after {:.1} s; sending {} bytes into USART1 and {} into USART2",
         started.elapsed().as_secs_f64(),

@@ -91,39 +91,14 @@ fn replay(streams: &Streams, blob: &[u8], free: &[u8]) -> Result<(Vec<Message>, 
         Robot::<CAPACITY, BEAMS>::new(&mut store, view, Some(free), layout, config, None)
             .map_err(|e| Error::Host(format!("robot setup: {e}")))?;
     let mut sink = Collect::default();
-    let chunks: Option<(usize, usize)> = std::env::var("ROBOT_CHUNKS").ok().and_then(|v| {
-        let (a, b) = v.split_once(',')?;
-        Some((a.parse().ok()?, b.parse().ok()?))
-    });
-    if let Some((lc, kc)) = chunks {
-        let (mut li, mut ki, mut idle) = (0usize, 0usize, 0u32);
-        loop {
-            let mut l = SliceSource::new(&streams.lidar[li..(li + lc).min(streams.lidar.len())]);
-            let mut k = SliceSource::new(&streams.link[ki..(ki + kc).min(streams.link.len())]);
-            let p = robot.poll(&mut l, &mut k, &mut sink);
-            li += l.taken();
-            ki += k.taken();
-            idle = if p.is_idle() { idle + 1 } else { 0 };
-            if idle > 1000 {
-                eprintln!(
-                    "stuck at lidar {li}/{} link {ki}/{}: {:?}",
-                    streams.lidar.len(),
-                    streams.link.len(),
-                    robot.counters()
-                );
-                break;
-            }
-        }
-    } else {
-        let (mut lidar, mut link) = (
-            SliceSource::new(&streams.lidar),
-            SliceSource::new(&streams.link),
-        );
-        loop {
-            let p = robot.poll(&mut lidar, &mut link, &mut sink);
-            if p.is_idle() && lidar.is_empty() && link.is_empty() {
-                break;
-            }
+    let (mut lidar, mut link) = (
+        SliceSource::new(&streams.lidar),
+        SliceSource::new(&streams.link),
+    );
+    loop {
+        let p = robot.poll(&mut lidar, &mut link, &mut sink);
+        if p.is_idle() && lidar.is_empty() && link.is_empty() {
+            break;
         }
     }
     Ok((sink.0, robot.counters()))
