@@ -25,7 +25,7 @@ MAX_POSITION_M = 1.0e5
 # pi rounded to f32, as a double.
 MAX_THETA_RAD = struct.unpack("<f", struct.pack("<f", math.pi))[0]
 MAX_PARTICLES = 65535
-MAX_ENCODED_LEN = 76
+MAX_ENCODED_LEN = 88
 
 # type: (name, struct format of the payload). "f" fields are f32.
 LAYOUT = {
@@ -35,7 +35,7 @@ LAYOUT = {
     0x04: ("start_global_localization", "<"),
     0x05: ("request_no_motion_update", "<"),
     0x06: ("set_parameters", "<BHfffff"),
-    0x81: ("estimate", "<Qfff9ffHBf"),
+    0x81: ("estimate", "<Qfff9ffHBffff"),
     0x82: ("heartbeat", "<Q8I"),
     0x83: ("error", "<BBHB"),
 }
@@ -136,6 +136,7 @@ def check(t, v, fmt):
             raise Refused("out_of_range", at[13])
         if not (math.isfinite(v[16]) and 0 <= v[16] <= 1):
             raise Refused("out_of_range", at[16])
+        check_pose(v, at, 17)
     elif t == 0x83:
         if not 1 <= v[0] <= 7:
             raise Refused("out_of_range", 0)
@@ -237,7 +238,7 @@ def encode_main(lines_path, out_path):
     bad("wrong_version", 0x01, 903, 0, encode_frame(0x01, 903, pose, version=2))
     bad("unknown_type", 0x7E, 904, 0, encode_frame(0x7E, 904, b""))
     bad("wrong_length", 0x02, 905, 0, encode_frame(0x02, 905, b"\1" * 15))
-    est = struct.pack("<Qfff9ffHBf", 1, 0.0, 0.0, 0.0, *cov, 10.0, 0x40, 0, 0.0)
+    est = struct.pack("<Qfff9ffHBffff", 1, 0.0, 0.0, 0.0, *cov, 10.0, 0x40, 0, 0.0, 0.0, 0.0, 0.0)
     bad("out_of_range", 0x81, 906, 60, encode_frame(0x81, 906, est))
     params = struct.pack("<BHfffff", 0x02, 0, -1.0, 0.0, 0.0, 0.0, 0.0)
     bad("out_of_range", 0x06, 907, 3, encode_frame(0x06, 907, params))

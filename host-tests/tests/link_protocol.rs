@@ -85,10 +85,11 @@ fn message() -> impl Strategy<Value = Message> {
             0.0f32..=65_535.0,
             flags,
             state,
-            0.0f32..=1.0
+            0.0f32..=1.0,
+            pose()
         )
             .prop_map(
-                |(timestamp_us, pose, covariance, ess, flags, state, score)| {
+                |(timestamp_us, pose, covariance, ess, flags, state, score, odometry)| {
                     Message::Estimate(Estimate {
                         timestamp_us,
                         pose,
@@ -96,6 +97,7 @@ fn message() -> impl Strategy<Value = Message> {
                         ess,
                         flags,
                         quality: Quality { state, score },
+                        odometry,
                     })
                 }
             ),

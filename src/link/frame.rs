@@ -17,7 +17,7 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     CRC.checksum(bytes)
 }
 
-/// The payload offset as the error's `u8` (payloads are at most 67 bytes).
+/// The payload offset as the error's `u8` (payloads are at most 79 bytes).
 fn offset_u8(offset: usize) -> u8 {
     u8::try_from(offset).unwrap_or(u8::MAX)
 }

@@ -114,17 +114,23 @@ pub struct Estimate {
     pub flags: EstimateFlags,
     /// Quality signal.
     pub quality: Quality,
+    /// The odometry-frame pose (metres, metres, radians) at the scan's time: the odometry the
+    /// update predicted to. With [`Self::pose`] it gives the map → odom transform
+    /// (`pose ⊖ odometry`), the one nav2_amcl broadcasts, without the computer needing the
+    /// odometry at the scan's time itself. Ranges as in [`super::WheelOdometry::pose`].
+    pub odometry: Pose,
 }
 
 impl Estimate {
     /// The message for the filter's [`crate::mcl::Estimate`] of a scan that ended at
-    /// `timestamp_us`. The covariance is made exactly symmetric (the mean of each mirrored
+    /// `timestamp_us`, predicted to the odometry pose `odometry`. The covariance is made exactly symmetric (the mean of each mirrored
     /// pair), so that it passes the receiver's check.
     pub fn from_mcl(
         estimate: &crate::mcl::Estimate,
         timestamp_us: u64,
         flags: EstimateFlags,
         quality: Quality,
+        odometry: Pose,
     ) -> Self {
         let mut covariance = estimate.covariance;
         let c = estimate.covariance;
@@ -141,6 +147,7 @@ impl Estimate {
             ess: estimate.ess,
             flags,
             quality,
+            odometry,
         }
     }
 
@@ -159,6 +166,7 @@ impl Estimate {
                 state,
                 score: wire::f32_at(p, es::QUALITY_SCORE),
             },
+            odometry: wire::pose_at(p, es::ODOM_X_M, es::ODOM_Y_M, es::ODOM_THETA_RAD),
         })
     }
 
@@ -175,6 +183,12 @@ impl Estimate {
         require(
             s.is_finite() && (0.0..=1.0).contains(&s),
             &es::QUALITY_SCORE,
+        )?;
+        wire::check_pose(
+            &self.odometry,
+            &es::ODOM_X_M,
+            &es::ODOM_Y_M,
+            &es::ODOM_THETA_RAD,
         )
     }
 
@@ -186,6 +200,13 @@ impl Estimate {
         wire::put_u16(p, es::FLAGS, self.flags.bits());
         wire::put_u8(p, es::QUALITY_STATE, self.quality.state as u8);
         wire::put_f32(p, es::QUALITY_SCORE, self.quality.score);
+        wire::put_pose(
+            p,
+            es::ODOM_X_M,
+            es::ODOM_Y_M,
+            es::ODOM_THETA_RAD,
+            &self.odometry,
+        );
     }
 }
 

@@ -108,8 +108,14 @@ pub mod estimate {
     pub const QUALITY_STATE: Field = 62..63;
     /// `f32`, quality score in `[0, 1]`.
     pub const QUALITY_SCORE: Field = 63..67;
+    /// `f32`, m, odometry frame: the odometry pose the update predicted to (x).
+    pub const ODOM_X_M: Field = 67..71;
+    /// `f32`, m, odometry frame (y).
+    pub const ODOM_Y_M: Field = 71..75;
+    /// `f32`, rad, odometry frame (θ).
+    pub const ODOM_THETA_RAD: Field = 75..79;
     /// Payload length.
-    pub const LEN: usize = 67;
+    pub const LEN: usize = 79;
 }
 
 /// `Heartbeat` (type `0x82`): every counter a wrapping `u32` since the device started.

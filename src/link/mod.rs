@@ -1,6 +1,6 @@
 //! The serial link between the device and the computer: framed, checksummed, versioned
 //! messages, encoder and decoder side by side. `no_std`, no allocation (the caller's buffers, a
-//! fixed 77-byte buffer in the [`Decoder`]), no panic on any input.
+//! fixed 89-byte buffer in the [`Decoder`]), no panic on any input.
 //!
 //! `docs/link-protocol.md` describes the protocol byte by byte for an implementation in another
 //! language; in short, every frame on the wire is

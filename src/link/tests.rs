@@ -45,6 +45,7 @@ fn samples() -> [Message; 9] {
                 state: QualityState::Uncertain,
                 score: 0.75,
             },
+            odometry: Pose::new(-12.5, 0.25, -1.5),
         }),
         Message::Heartbeat(Heartbeat {
             timestamp_us: 5,
@@ -107,7 +108,7 @@ fn stream(bytes: &[u8]) -> (Vec<Result<Frame, LinkError>>, LinkStats) {
 #[test]
 fn every_message_round_trips_at_its_size() {
     // Payload sizes of docs/link-protocol.md.
-    let sizes = [20, 16, 56, 0, 0, 23, 67, 40, 5];
+    let sizes = [20, 16, 56, 0, 0, 23, 79, 40, 5];
     for (m, size) in samples().iter().zip(sizes) {
         assert_eq!(m.message_type().payload_len(), size, "{m:?}");
         for seq in [0, 1, 0x00FF, 0xFFFF] {
@@ -126,8 +127,8 @@ fn every_message_round_trips_at_its_size() {
             assert_eq!(encoded(frame.seq, &frame.message), wire);
         }
     }
-    assert_eq!(MAX_FRAME_LEN, 75);
-    assert_eq!(MAX_WIRE_LEN, 77);
+    assert_eq!(MAX_FRAME_LEN, 87);
+    assert_eq!(MAX_WIRE_LEN, 89);
 }
 
 #[test]
@@ -465,7 +466,13 @@ fn estimate_from_the_filter_is_made_symmetric() {
         ess: 120.0,
     };
     e.covariance[0][1] = 0.010_000_1;
-    let m = Estimate::from_mcl(&e, 7, EstimateFlags::INITIALIZED, Quality::default());
+    let m = Estimate::from_mcl(
+        &e,
+        7,
+        EstimateFlags::INITIALIZED,
+        Quality::default(),
+        Pose::default(),
+    );
     assert_eq!(m.covariance[0][1], m.covariance[1][0]);
     assert!(decode(&encoded(0, &Message::Estimate(m))[..MAX_ENCODED_LEN]).is_ok());
 }

@@ -873,11 +873,15 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         if self.global && settled(&self.mcl, &e.pose) {
             self.global = false;
         }
+        // The odometry the prediction reached: this revolution's, or the last one used when
+        // none reached the device (then the robot is taken to have stood still).
+        let odometry = odom.map(|o| o.pose).or(self.last_odom).unwrap_or_default();
         Some(link::Estimate::from_mcl(
             &e,
             rev.t_us,
             flags,
             Quality::default(),
+            odometry,
         ))
     }
 

@@ -55,11 +55,35 @@ enum Command {
     /// XV-11 stream; `lidar decode` decodes a stream into scans and counters.
     #[command(subcommand)]
     Lidar(beamfield_tools::lidar_cmd::LidarCommand),
+    /// The device's link to ROS 2, as nav2_amcl speaks it: estimates on amcl_pose, the
+    /// map → odom transform on /tf, initialpose and nav2_amcl's services to the device
+    /// (docs/nav2.md).
+    Bridge(beamfield_bridge::BridgeArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Bridge(args) => match beamfield_bridge::run(&args) {
+            Ok(report) => {
+                if cli.json {
+                    match serde_json::to_string_pretty(&report) {
+                        Ok(j) => println!("{j}"),
+                        Err(e) => {
+                            eprintln!("beamfield bridge: {e}");
+                            return ExitCode::FAILURE;
+                        }
+                    }
+                } else {
+                    print!("{report}");
+                }
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("beamfield bridge: {e}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Info => {
             println!("{}", beamfield_tools::info::render(cli.json));
             ExitCode::SUCCESS

@@ -24,6 +24,7 @@ mod nopanic;
 mod process;
 mod qemu;
 mod robot;
+mod ros2;
 mod toolchain;
 mod track;
 mod willow;
@@ -160,6 +161,15 @@ enum Task {
         #[arg(long, conflicts_with = "no_count")]
         split: bool,
     },
+    /// The ROS 2 bridge against a ROS 2 peer nobody here wrote, on 127.0.0.1 only: the robot
+    /// application in QEMU (`robot --bridge-port`), `beamfield bridge` on its link, and
+    /// host-tests/python/ros2_peer.py (PyPI cyclonedds) receiving amcl_pose and /tf, sending
+    /// initialpose (a good one, then a NaN one) and calling request_nomotion_update.
+    Ros2 {
+        /// Scans of the Intel log to send.
+        #[arg(long, value_name = "N", default_value_t = 300)]
+        scans: usize,
+    },
     /// Regenerate the demo assets from the Intel log in data/: the map blobs (firmware/assets/)
     /// and the scans (fixtures/assets/).
     /// The robot application on the STM32F405 (QEMU `netduinoplus2`): the Intel lab log sent
@@ -179,6 +189,10 @@ enum Task {
         /// Count the receive interrupt handlers instead (their longest path).
         #[arg(long, conflicts_with = "count")]
         isr: bool,
+        /// Offer the device's link on 127.0.0.1:PORT to `beamfield bridge --connect`: its
+        /// output is forwarded there, the bridge's frames go into USART2 (paced by the device).
+        #[arg(long, value_name = "PORT", conflicts_with = "host_only")]
+        bridge_port: Option<u16>,
         /// Only the host: the streams, the replay and its accuracy, without QEMU.
         #[arg(long, conflicts_with_all = ["count", "isr"])]
         host_only: bool,
@@ -234,13 +248,24 @@ fn main() -> ExitCode {
             count,
             isr,
             host_only,
-        } => robot::robot(robot::Options {
-            scans,
-            no_kidnap,
-            count,
-            isr,
-            host_only,
-        }),
+            bridge_port,
+        } => bridge_port
+            .map(robot::bridge::listen)
+            .transpose()
+            .and_then(|listener| {
+                robot::robot(
+                    robot::Options {
+                        scans,
+                        no_kidnap,
+                        count,
+                        isr,
+                        host_only,
+                        bridge: listener.is_some(),
+                    },
+                    listener.as_ref(),
+                )
+            }),
+        Task::Ros2 { scans } => ros2::ros2(scans),
         Task::DemoAssets => demo::demo_assets(),
         Task::Track { board, insns } => {
             if insns {

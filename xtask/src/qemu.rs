@@ -282,6 +282,9 @@ pub struct RobotRun {
     pub finished: Finished,
     /// The bytes of USART3.
     pub usart3: Vec<u8>,
+    /// What went into USART2: the link stream given, or with a bridge, that stream with the
+    /// bridge's frames between its own.
+    pub usart2: crate::robot::bridge::Written,
     /// From QEMU's start to its end.
     pub elapsed: Duration,
 }
@@ -291,7 +294,8 @@ pub struct RobotRun {
 /// into USART2, each from its own thread (QEMU takes a byte only when the firmware has read the
 /// previous one, so each write blocks until the firmware catches up), and waits for QEMU to
 /// exit (the firmware ends once both lines have been silent, feature `emulator`), at most
-/// `timeout_s`.
+/// `timeout_s`. With `bridge`, USART3 is forwarded to it and its frames go into USART2
+/// (`crate::robot::bridge`).
 pub fn run_robot(
     elf: &Path,
     ready: &str,
@@ -299,7 +303,10 @@ pub fn run_robot(
     link: &[u8],
     extra: &[String],
     timeout_s: u64,
+    bridge: Option<std::net::TcpStream>,
 ) -> Result<RobotRun> {
+    use crate::robot::bridge::{self, Shared, Written};
+    use std::sync::Arc;
     let dir = scratch()?;
     let (s1, s2, out3) = (
         dir.join("usart1.sock"),
@@ -363,11 +370,39 @@ pub fn run_robot(
         Ok(c)
     };
     let (mut c1, mut c2) = (connect(&s1)?, connect(&s2)?);
+    let shared = Arc::new(Shared {
+        device_us: Default::default(),
+        done: Default::default(),
+        from_bridge: Default::default(),
+    });
+    let forwarding = match bridge {
+        Some(conn) => {
+            let reader = conn.try_clone().map_err(|e| Error::Host(e.to_string()))?;
+            let sh = shared.clone();
+            std::thread::spawn(move || bridge::read_bridge(reader, sh));
+            let (sh, path) = (shared.clone(), out3.clone());
+            Some(std::thread::spawn(move || {
+                bridge::forward_output(&path, conn, sh)
+            }))
+        }
+        None => None,
+    };
+    let paced = forwarding.is_some();
     let (sent, status) = std::thread::scope(|scope| {
-        let w2 = scope.spawn(move || -> std::io::Result<UnixStream> {
-            c2.write_all(link)?;
+        let sh = &shared;
+        let w2 = scope.spawn(move || -> std::io::Result<(UnixStream, Written)> {
+            let written = if paced {
+                bridge::write_paced(&mut c2, link, sh)?
+            } else {
+                c2.write_all(link)?;
+                Written {
+                    bytes: link.to_vec(),
+                    bridge_frames: 0,
+                    first_bridge_at_us: None,
+                }
+            };
             c2.flush()?;
-            Ok(c2)
+            Ok((c2, written))
         });
         let w1 = scope.spawn(move || -> std::io::Result<UnixStream> {
             let mut at = Instant::now();
@@ -390,6 +425,12 @@ pub fn run_robot(
         let sent = (w1.join(), w2.join());
         (sent, status)
     });
+    shared
+        .done
+        .store(true, std::sync::atomic::Ordering::Release);
+    if let Some(f) = forwarding {
+        let _ = f.join();
+    }
     let status = status.map_err(|e| Error::Spawn {
         command: "waiting for QEMU".into(),
         source: e,
@@ -398,17 +439,21 @@ pub fn run_robot(
     let (stdout, stderr) = (read(&out_p), read(&err_p));
     let usart3 = fs::read(&out3).map_err(|e| Error::io(&out3, e))?;
     let _ = fs::remove_dir_all(&dir);
-    for (what, r) in [("USART1", sent.0), ("USART2", sent.1)] {
-        match r {
-            Ok(Ok(_)) => {}
-            Ok(Err(e)) => {
-                return Err(Error::Qemu(format!(
-                    "sending into {what} failed ({e}); the firmware printed:\n{stdout}{stderr}"
-                )))
-            }
-            Err(_) => return Err(Error::Host(format!("the {what} writer thread panicked"))),
-        }
+    let failed = |what: &str, e: std::io::Error| {
+        Error::Qemu(format!(
+            "sending into {what} failed ({e}); the firmware printed:\n{stdout}{stderr}"
+        ))
+    };
+    match sent.0 {
+        Ok(Ok(_)) => {}
+        Ok(Err(e)) => return Err(failed("USART1", e)),
+        Err(_) => return Err(Error::Host("the USART1 writer thread panicked".into())),
     }
+    let usart2 = match sent.1 {
+        Ok(Ok((_, w))) => w,
+        Ok(Err(e)) => return Err(failed("USART2", e)),
+        Err(_) => return Err(Error::Host("the USART2 writer thread panicked".into())),
+    };
     Ok(RobotRun {
         finished: Finished {
             code: status.and_then(|s| s.code()).unwrap_or(137),
@@ -416,6 +461,7 @@ pub fn run_robot(
             stderr,
         },
         usart3,
+        usart2,
         elapsed,
     })
 }

@@ -14,6 +14,7 @@
 //! 3. The estimates are compared with the logged poses, and (feature `count`) the instruction
 //!    counts of every stage give the time budget of a revolution.
 
+pub mod bridge;
 pub mod streams;
 pub mod wheels;
 
@@ -58,6 +59,9 @@ pub struct Options {
     pub isr: bool,
     /// Only the host's run (no QEMU): the streams, the recomputation and the accuracy.
     pub host_only: bool,
+    /// Offer the device's link to a bridge (`bridge`): the listening socket is the second
+    /// argument of [`robot`].
+    pub bridge: bool,
 }
 
 /// Frames sent by the application, in order.
@@ -108,7 +112,7 @@ fn replay(streams: &Streams, blob: &[u8], free: &[u8]) -> Result<(Vec<Message>, 
 fn deterministic(m: &Message) -> String {
     match m {
         Message::Estimate(e) => format!(
-            "estimate t={} x={:08x} y={:08x} th={:08x} ess={:08x} flags={:04x} cov={:08x?}",
+            "estimate t={} x={:08x} y={:08x} th={:08x} ess={:08x} flags={:04x} cov={:08x?} odom={:08x}/{:08x}/{:08x}",
             e.timestamp_us,
             e.pose.x_m.to_bits(),
             e.pose.y_m.to_bits(),
@@ -116,6 +120,9 @@ fn deterministic(m: &Message) -> String {
             e.ess.to_bits(),
             e.flags.bits(),
             e.covariance.map(|r| r.map(f32::to_bits)),
+            e.odometry.x_m.to_bits(),
+            e.odometry.y_m.to_bits(),
+            e.odometry.theta_rad.to_bits(),
         ),
         Message::Heartbeat(h) => format!(
             "heartbeat t={} scans={} updates={}",
@@ -217,7 +224,8 @@ fn accuracy(frames: &[Message], s: &Streams, plan: &Plan) -> Accuracy {
     }
 }
 
-pub fn robot(opts: Options) -> Result {
+/// Runs the task; with `opts.bridge`, the bridge connects to `listener`.
+pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result {
     let log_path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
     let log = streams::read_log(&log_path)?;
     let scans = opts.scans.unwrap_or(log.len()).clamp(2, log.len());
@@ -227,7 +235,7 @@ pub fn robot(opts: Options) -> Result {
         global_at: kidnap.then_some(GLOBAL_AT),
         recover_after: RECOVER_AFTER,
     };
-    let s = streams::build(&log, &plan, WheelErrors::TYPICAL, WHEEL_SEED)?;
+    let mut s = streams::build(&log, &plan, WheelErrors::TYPICAL, WHEEL_SEED)?;
     let w = WheelErrors::TYPICAL;
     println!(
         "robot: {} Intel scans as {} LD06 revolutions at 10 Hz ({} bytes into USART1); {} wheel-tick messages at 50 Hz from a differential drive with left/right radii x{}/x{}, wheelbase x{} of what the device believes, {} % slip per step and a {} % slip one step in {}, {} commands{}, and bad input ({} garbage bytes, {} replayed frame, {} encoder glitch, {} refused parameter, {} broken CRC): {} bytes into USART2",
@@ -256,6 +264,31 @@ pub fn robot(opts: Options) -> Result {
         s.link.len()
     );
     let (blob, free) = assets()?;
+    // With a bridge, the device runs first: what reaches USART2 is known only afterwards, and
+    // the host replays exactly that.
+    let mut device = None;
+    let mut bridged_from_us = None;
+    if let (true, Some(listener)) = (opts.bridge, listener) {
+        // Built before the bridge is waited for: then the run starts as soon as it connects.
+        build_program(Board::Netduinoplus2, BIN, &features(&opts))?;
+        let conn = bridge::accept(listener)?;
+        let (d, written) = run_device(&opts, &s, Some(conn))?;
+        println!(
+            "bridge: {} frames from the bridge went into USART2 ({} bytes in all){}",
+            written.bridge_frames,
+            written.bytes.len(),
+            match written.first_bridge_at_us {
+                Some(t) => format!(
+                    ", the first at the replay's {:.3} s: estimates from then on are not scored",
+                    t as f64 * 1e-6
+                ),
+                None => String::new(),
+            }
+        );
+        bridged_from_us = written.first_bridge_at_us;
+        s.link = written.bytes;
+        device = Some(d);
+    }
     let (host, host_counters) = replay(&s, &blob, &free)?;
     let host_estimates = host
         .iter()
@@ -275,7 +308,7 @@ pub fn robot(opts: Options) -> Result {
             s.injected.refused as usize,
         ))
         .collect();
-    if errors_of(&host) != want_errors {
+    if !opts.bridge && errors_of(&host) != want_errors {
         let got: Vec<&Message> = host
             .iter()
             .filter(|m| matches!(m, Message::Error(_)))
@@ -306,11 +339,23 @@ pub fn robot(opts: Options) -> Result {
     let frames = if opts.host_only {
         host.clone()
     } else {
-        let device = run_device(&opts, &s)?;
-        compare(&host, &device)?;
+        let device = match device {
+            Some(d) => d,
+            None => run_device(&opts, &s, None)?.0,
+        };
+        compare(&host, &device, opts.bridge)?;
         device
     };
-    let a = accuracy(&frames, &s, &plan);
+    // Estimates after the bridge's first command answer that command, not the plan.
+    let scored: Vec<Message> = frames
+        .iter()
+        .filter(|m| match (m, bridged_from_us) {
+            (Message::Estimate(e), Some(t)) => e.timestamp_us < t,
+            _ => true,
+        })
+        .copied()
+        .collect();
+    let a = accuracy(&scored, &s, &plan);
     let flagged_global = frames
         .iter()
         .filter(|m| matches!(m, Message::Estimate(e) if e.flags.contains(EstimateFlags::GLOBAL_LOCALIZATION)))
@@ -348,8 +393,8 @@ pub fn robot(opts: Options) -> Result {
     Ok(())
 }
 
-fn run_device(opts: &Options, s: &Streams) -> Result<Vec<Message>> {
-    ensure_qemu()?;
+/// The firmware's features for `opts`.
+fn features(opts: &Options) -> Vec<&'static str> {
     let mut features = vec!["emulator"];
     if opts.count {
         features.push("count");
@@ -357,13 +402,22 @@ fn run_device(opts: &Options, s: &Streams) -> Result<Vec<Message>> {
     if opts.isr {
         features.push("count-isr");
     }
-    let elf = build_program(Board::Netduinoplus2, BIN, &features)?;
+    features
+}
+
+fn run_device(
+    opts: &Options,
+    s: &Streams,
+    bridge: Option<std::net::TcpStream>,
+) -> Result<(Vec<Message>, bridge::Written)> {
+    ensure_qemu()?;
+    let elf = build_program(Board::Netduinoplus2, BIN, &features(opts))?;
     let extra = if opts.count || opts.isr {
         qemu_args(&elf, ", or run `cargo xtask robot` without --count")?
     } else {
         Vec::new()
     };
-    let run = run_robot(&elf, READY, &s.lidar, &s.link, &extra, TIMEOUT_S)?;
+    let run = run_robot(&elf, READY, &s.lidar, &s.link, &extra, TIMEOUT_S, bridge)?;
     let out = &run.finished;
     for l in out.stdout.lines().filter(|l| l.starts_with("robot: ")) {
         println!("device {l}");
@@ -393,12 +447,50 @@ fn run_device(opts: &Options, s: &Streams) -> Result<Vec<Message>> {
     if opts.isr {
         isr(&out.stderr, s)?;
     }
-    Ok(device)
+    Ok((device, run.usart2))
 }
 
 /// Every estimate and error report, and every heartbeat's time, scans and updates, equal; the
 /// device may add heartbeats at the end (sent while its lines were silent).
-fn compare(host: &[Message], device: &[Message]) -> Result {
+/// With `by_kind`, estimates, error reports and heartbeats are compared as three sequences:
+/// when the link's bytes arrive paced (a bridge), an error report, sent as its frame arrives,
+/// may come before or after an estimate on the device and in the host's replay.
+fn compare(host: &[Message], device: &[Message], by_kind: bool) -> Result {
+    let extra = if by_kind {
+        let kind = |m: &Message| match m {
+            Message::Estimate(_) => 0,
+            Message::Error(_) => 1,
+            _ => 2,
+        };
+        let mut extra = 0;
+        for k in 0..3 {
+            let pick = |v: &[Message]| -> Vec<Message> {
+                v.iter().filter(|m| kind(m) == k).copied().collect()
+            };
+            extra += same_frames(&pick(host), &pick(device))?;
+        }
+        extra
+    } else {
+        same_frames(host, device)?
+    };
+    let estimates = host
+        .iter()
+        .filter(|m| matches!(m, Message::Estimate(_)))
+        .count();
+    let errors = host
+        .iter()
+        .filter(|m| matches!(m, Message::Error(_)))
+        .count();
+    let heartbeats = host.len() - estimates - errors;
+    println!(
+        "device = host: all {estimates} estimates bit for bit (time, pose, covariance, ESS, flags, odometry), all {errors} error reports, all {heartbeats} heartbeats' time, scans and updates{}; then {extra} heartbeats of the silent line at the end",
+        if by_kind { " (each kind in order)" } else { "" }
+    );
+    Ok(())
+}
+
+/// `device` is `host` frame for frame, then heartbeats only; how many of those.
+fn same_frames(host: &[Message], device: &[Message]) -> Result<usize> {
     let h: Vec<String> = host.iter().map(deterministic).collect();
     let d: Vec<String> = device.iter().map(deterministic).collect();
     if let Some(i) = (0..h.len()).find(|&i| d.get(i) != h.get(i)) {
@@ -415,20 +507,7 @@ fn compare(host: &[Message], device: &[Message]) -> Result {
             extra.len()
         )));
     }
-    let estimates = host
-        .iter()
-        .filter(|m| matches!(m, Message::Estimate(_)))
-        .count();
-    let errors = host
-        .iter()
-        .filter(|m| matches!(m, Message::Error(_)))
-        .count();
-    let heartbeats = host.len() - estimates - errors;
-    println!(
-        "device = host: all {estimates} estimates bit for bit (time, pose, covariance, ESS, flags), all {errors} error reports, all {heartbeats} heartbeats' time, scans and updates; then {} heartbeats of the silent line at the end",
-        extra.len()
-    );
-    Ok(())
+    Ok(extra.len())
 }
 
 /// Instructions per revolution by stage against 100 ms at 168 MHz.

@@ -1,0 +1,19 @@
+//! `beamfield bridge`: the computer's side of a beamfield base controller. It reads the device's
+//! link (docs/link-protocol.md) from a serial port or a TCP socket and speaks ROS 2 the way
+//! nav2_amcl does (docs/nav2.md): the estimates on `amcl_pose`, the map → odom transform on
+//! `/tf`, `initialpose` and nav2_amcl's two services to the device.
+//!
+//! - [`msg`]: the ROS 2 messages, laid out as CDR has them;
+//! - [`convert`]: link messages to ROS messages and back, the device's clock on ROS time;
+//! - [`params`]: a nav2 params file's amcl section;
+//! - [`port`]: the link's bytes;
+//! - [`ros`]: the ROS 2 node.
+
+pub mod convert;
+pub mod msg;
+pub mod params;
+pub mod port;
+pub mod ros;
+mod run;
+
+pub use run::{run, BridgeArgs, BridgeError, BridgeReport};

@@ -1,0 +1,335 @@
+//! nav2's amcl parameters, read from a nav2 params file (`amcl: ros__parameters: …`): those
+//! with a counterpart on the bridge or the device are applied, every other one is named with
+//! the reason it is not (docs/nav2.md has the whole table).
+
+use std::collections::BTreeMap;
+
+use beamfield::link::{SetInitialPose, SetParameters};
+use beamfield::Pose;
+use serde::Serialize;
+use serde_yaml::Value;
+
+/// The bridge's settings that nav2_amcl's parameters name, with nav2's defaults.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Frames {
+    /// `global_frame_id`.
+    pub global: String,
+    /// `odom_frame_id`.
+    pub odom: String,
+    /// `base_frame_id` (only reported: the device's poses are of its base).
+    pub base: String,
+    /// `transform_tolerance`, seconds the map → odom transform is post-dated by.
+    pub transform_tolerance_s: f64,
+    /// `tf_broadcast`.
+    pub tf_broadcast: bool,
+}
+
+impl Default for Frames {
+    fn default() -> Self {
+        Self {
+            global: "map".into(),
+            odom: "odom".into(),
+            base: "base_footprint".into(),
+            transform_tolerance_s: 1.0,
+            tf_broadcast: true,
+        }
+    }
+}
+
+/// What a params file says, sorted into what is applied and what is not.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Nav2Params {
+    pub frames: Frames,
+    /// To send to the device at start (particles and α), if any was given.
+    #[serde(skip)]
+    pub set_parameters: Option<SetParameters>,
+    /// To send at start when `set_initial_pose` is true.
+    #[serde(skip)]
+    pub initial_pose: Option<SetInitialPose>,
+    /// Applied: `name → what it became`.
+    pub applied: BTreeMap<String, String>,
+    /// Not applied: `name → why`.
+    pub ignored: BTreeMap<String, String>,
+}
+
+/// A params file that could not be used.
+#[derive(Debug)]
+pub enum ParamsError {
+    Read(std::path::PathBuf, std::io::Error),
+    Yaml(serde_yaml::Error),
+    /// No `amcl: ros__parameters:` mapping.
+    NoAmclSection,
+    /// A parameter with a counterpart but a value of the wrong type or range.
+    Value {
+        name: String,
+        why: String,
+    },
+}
+
+impl std::fmt::Display for ParamsError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Read(p, e) => write!(f, "cannot read {}: {e}", p.display()),
+            Self::Yaml(e) => write!(f, "not a YAML params file: {e}"),
+            Self::NoAmclSection => f.write_str(
+                "no `amcl: ros__parameters:` section (the bridge reads nav2_amcl's parameters)",
+            ),
+            Self::Value { name, why } => write!(f, "parameter {name}: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for ParamsError {}
+
+/// Why each nav2_amcl parameter without a counterpart is not applied.
+fn not_supported(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "alpha5" => "omnidirectional motion model only; the device uses the differential one",
+        "robot_model_type" => "the device's motion model is differential drive (beamfield::mcl::OdometryNoise)",
+        "min_particles" => "the device keeps a fixed particle count (no KLD sampling): max_particles is used",
+        "laser_model_type" | "z_hit" | "z_short" | "z_max" | "z_rand" | "sigma_hit"
+        | "lambda_short" | "laser_likelihood_max_dist" | "laser_max_range" | "laser_min_range"
+        | "max_beams" => "the sensor model and its field are built into the firmware (beamfield field build, RobotConfig)",
+        "do_beamskip" | "beam_skip_distance" | "beam_skip_threshold"
+        | "beam_skip_error_threshold" => "no beam skipping on the device",
+        "update_min_d" | "update_min_a" => "set in the firmware's RobotConfig (not on the link)",
+        "resample_interval" => "the device resamples when the effective sample size falls below half",
+        "recovery_alpha_slow" | "recovery_alpha_fast" => "the device's recovery is configured in the firmware",
+        "pf_err" | "pf_z" => "no KLD sampling on the device",
+        "scan_topic" => "the LiDAR is wired to the device: there is no scan topic",
+        "map_topic" | "first_map_only" | "freespace_downsampling" => "the map is in the device's flash (beamfield field build)",
+        "save_pose_rate" => "the device keeps its last estimate itself (Sink::save)",
+        "always_reset_initial_pose" => "the device starts from its saved estimate or the initial pose sent",
+        "use_sim_time" => "use --clock device for replays",
+        "bond_heartbeat_period" | "bond_disable_heartbeat_timeout" => "no lifecycle bond",
+        _ => return None,
+    })
+}
+
+fn number(name: &str, v: &Value) -> Result<f64, ParamsError> {
+    v.as_f64()
+        .filter(|x| x.is_finite())
+        .ok_or_else(|| ParamsError::Value {
+            name: name.into(),
+            why: format!("{v:?} is not a finite number"),
+        })
+}
+
+fn text(name: &str, v: &Value) -> Result<String, ParamsError> {
+    v.as_str()
+        .map(str::to_owned)
+        .ok_or_else(|| ParamsError::Value {
+            name: name.into(),
+            why: format!("{v:?} is not a string"),
+        })
+}
+
+impl Nav2Params {
+    /// Reads a nav2 params file.
+    pub fn read(path: &std::path::Path) -> Result<Self, ParamsError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ParamsError::Read(path.into(), e))?;
+        Self::parse(&text)
+    }
+
+    /// Parses a nav2 params file's text.
+    pub fn parse(yaml: &str) -> Result<Self, ParamsError> {
+        let doc: Value = serde_yaml::from_str(yaml).map_err(ParamsError::Yaml)?;
+        let params = doc
+            .get("amcl")
+            .and_then(|a| a.get("ros__parameters"))
+            .and_then(Value::as_mapping)
+            .ok_or(ParamsError::NoAmclSection)?;
+        let mut out = Self::default();
+        let mut sp = SetParameters::default();
+        let mut any_sp = false;
+        let mut set_initial = false;
+        let mut initial = (0.0f64, 0.0f64, 0.0f64);
+        for (k, v) in params {
+            let Some(name) = k.as_str() else { continue };
+            let applied = |out: &mut Self, what: String| {
+                out.applied.insert(name.to_owned(), what);
+            };
+            match name {
+                "global_frame_id" => {
+                    out.frames.global = text(name, v)?;
+                    let v = out.frames.global.clone();
+                    applied(&mut out, v);
+                }
+                "odom_frame_id" => {
+                    out.frames.odom = text(name, v)?;
+                    let v = out.frames.odom.clone();
+                    applied(&mut out, v);
+                }
+                "base_frame_id" => {
+                    out.frames.base = text(name, v)?;
+                    let v = out.frames.base.clone();
+                    applied(&mut out, v);
+                }
+                "transform_tolerance" => {
+                    let s = number(name, v)?;
+                    if s < 0.0 {
+                        return Err(ParamsError::Value {
+                            name: name.into(),
+                            why: "negative".into(),
+                        });
+                    }
+                    out.frames.transform_tolerance_s = s;
+                    applied(&mut out, format!("{s} s"));
+                }
+                "tf_broadcast" => {
+                    out.frames.tf_broadcast = v.as_bool().ok_or_else(|| ParamsError::Value {
+                        name: name.into(),
+                        why: "not a boolean".into(),
+                    })?;
+                    let v = out.frames.tf_broadcast.to_string();
+                    applied(&mut out, v);
+                }
+                "max_particles" => {
+                    let n = v
+                        .as_u64()
+                        .filter(|n| (1..=65_535).contains(n))
+                        .ok_or_else(|| ParamsError::Value {
+                            name: name.into(),
+                            why: format!("{v:?} is not a particle count in 1..=65535"),
+                        })?;
+                    sp.particles = Some(n as u16);
+                    any_sp = true;
+                    applied(&mut out, format!("SetParameters particles {n}"));
+                }
+                "alpha1" | "alpha2" | "alpha3" | "alpha4" => {
+                    let a = number(name, v)?;
+                    if a < 0.0 {
+                        return Err(ParamsError::Value {
+                            name: name.into(),
+                            why: "negative".into(),
+                        });
+                    }
+                    let i = usize::from(name.as_bytes()[5] - b'1');
+                    sp.odom_alpha[i] = Some(a as f32);
+                    any_sp = true;
+                    applied(&mut out, format!("SetParameters α{} {a}", i + 1));
+                }
+                "set_initial_pose" => {
+                    set_initial = v.as_bool().unwrap_or(false);
+                    applied(&mut out, set_initial.to_string());
+                }
+                "initial_pose" => {
+                    let get = |k: &str| v.get(k).map(|x| number(k, x)).transpose();
+                    initial = (
+                        get("x")?.unwrap_or(0.0),
+                        get("y")?.unwrap_or(0.0),
+                        get("yaw")?.unwrap_or(0.0),
+                    );
+                    applied(
+                        &mut out,
+                        format!(
+                            "x {} m, y {} m, yaw {} rad",
+                            initial.0, initial.1, initial.2
+                        ),
+                    );
+                }
+                other => {
+                    let why = not_supported(other)
+                        .unwrap_or("not a nav2_amcl parameter the bridge knows");
+                    out.ignored.insert(other.to_owned(), why.to_owned());
+                }
+            }
+        }
+        if any_sp {
+            out.set_parameters = Some(sp);
+        }
+        if set_initial {
+            let yaw = initial.2.sin().atan2(initial.2.cos());
+            // nav2_amcl's default initial covariance: 0.5 m standard deviation, (π/12)² in yaw.
+            let mut c = [[0.0f32; 3]; 3];
+            c[0][0] = 0.25;
+            c[1][1] = 0.25;
+            c[2][2] = (core::f32::consts::PI / 12.0).powi(2);
+            out.initial_pose = Some(SetInitialPose {
+                timestamp_us: 0,
+                pose: Pose::new(initial.0 as f32, initial.1 as f32, yaw as f32),
+                covariance: c,
+            });
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const NAV2: &str = "
+amcl:
+  ros__parameters:
+    alpha1: 0.2
+    alpha2: 0.2
+    alpha3: 0.2
+    alpha4: 0.2
+    alpha5: 0.2
+    base_frame_id: base_link
+    beam_skip_distance: 0.5
+    do_beamskip: false
+    global_frame_id: map
+    laser_model_type: likelihood_field
+    max_particles: 2000
+    min_particles: 500
+    odom_frame_id: odom
+    robot_model_type: nav2_amcl::DifferentialMotionModel
+    set_initial_pose: true
+    initial_pose: {x: 1.5, y: -2.0, z: 0.0, yaw: 0.25}
+    tf_broadcast: true
+    transform_tolerance: 0.5
+    scan_topic: scan
+    z_hit: 0.5
+bt_navigator:
+  ros__parameters:
+    global_frame: map
+";
+
+    #[test]
+    fn nav2_defaults_file_sorts_into_applied_and_ignored() {
+        let p = Nav2Params::parse(NAV2).unwrap();
+        assert_eq!(p.frames.base, "base_link");
+        assert_eq!(p.frames.transform_tolerance_s, 0.5);
+        let sp = p.set_parameters.unwrap();
+        assert_eq!(sp.particles, Some(2000));
+        assert_eq!(sp.odom_alpha, [Some(0.2); 4]);
+        let ip = p.initial_pose.unwrap();
+        assert_eq!(
+            (ip.pose.x_m, ip.pose.y_m, ip.pose.theta_rad),
+            (1.5, -2.0, 0.25)
+        );
+        for k in [
+            "alpha5",
+            "min_particles",
+            "scan_topic",
+            "z_hit",
+            "do_beamskip",
+        ] {
+            assert!(p.ignored.contains_key(k), "{k}");
+        }
+        assert!(p.applied.contains_key("max_particles"));
+        assert_eq!(p.applied.len() + p.ignored.len(), 20);
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let bad = "amcl:\n  ros__parameters:\n    max_particles: 0\n";
+        let e = Nav2Params::parse(bad).unwrap_err();
+        assert!(e.to_string().contains("max_particles"), "{e}");
+        let nan = "amcl:\n  ros__parameters:\n    alpha1: .nan\n";
+        assert!(Nav2Params::parse(nan)
+            .unwrap_err()
+            .to_string()
+            .contains("alpha1"));
+        assert!(matches!(
+            Nav2Params::parse("controller_server: {}\n"),
+            Err(ParamsError::NoAmclSection)
+        ));
+        assert!(matches!(
+            Nav2Params::parse(":: ["),
+            Err(ParamsError::Yaml(_))
+        ));
+    }
+}
