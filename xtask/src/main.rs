@@ -5,6 +5,7 @@
 //! [`toolchain`] (rustup targets, LLVM tools, gcc), [`qemu`] (boards and QEMU runs),
 //! [`insncount`] (the counting plugin and the named regions), [`cross`] (firmware and
 //! cross builds), [`elf`] (sections, symbols, memory layouts), [`error`] (the one error type),
+//! [`report`] (the data the firmware programs send: link frames and test reports, decoded),
 //! and one module per task.
 
 mod budget_run;
@@ -23,6 +24,7 @@ mod lidar_ref;
 mod nopanic;
 mod process;
 mod qemu;
+mod report;
 mod robot;
 mod toolchain;
 mod track;
