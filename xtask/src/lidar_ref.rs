@@ -359,7 +359,10 @@ pub fn check(d: &DeviceReport, r: &Reference) -> Result<(usize, usize)> {
 
 #[cfg(test)]
 mod tests {
-    use super::{beam_at, close, stream, FLIPS};
+    use super::{beam_at, close, stream, DeviceReport, FLIPS};
+    use crate::error::{Error, ReportFault};
+    use crate::report::report_line;
+    use beamfield_fixtures::report::{LidarChunk, LidarEnd, LidarScan, Report};
 
     #[test]
     fn clockwise_degrees_map_to_the_flaser_beams() {
@@ -378,6 +381,94 @@ mod tests {
         assert_eq!(s.bytes.len(), s.scans * 30 * 47 + s.noise);
         assert_eq!(s.missing.iter().filter(|&&m| m > 0).count(), FLIPS.len());
         assert!(s.missing.iter().all(|&m| m <= 12));
+    }
+
+    /// The data lines of a run: scans, chunks and the end report.
+    fn device_lines(scans: &[LidarScan], chunks: &[LidarChunk], end: &LidarEnd) -> Vec<String> {
+        let mut out: Vec<String> = scans
+            .iter()
+            .map(|s| report_line(&Report::LidarScan(*s)))
+            .collect();
+        out.extend(chunks.iter().map(|c| report_line(&Report::LidarChunk(*c))));
+        out.push(report_line(&Report::LidarEnd(*end)));
+        out
+    }
+
+    #[test]
+    fn the_device_report_is_read_whole_and_a_missing_or_extra_report_is_an_error() {
+        let scan = |k: u32| LidarScan {
+            scan: k,
+            log_index: 300 + k,
+            points: 360,
+            valid: 180,
+            matching: 180,
+            missing: 0,
+            wrong: 0,
+            best: beamfield::Pose::new(1.0, 2.0, 0.5),
+            log_likelihood: 30.0,
+            ess: 20.0,
+        };
+        let scans = [scan(0), scan(1)];
+        let chunks = [LidarChunk {
+            bytes: 100,
+            scans: 1,
+        }];
+        let end = LidarEnd {
+            decoder: Default::default(),
+            assembler: Default::default(),
+            received: 100,
+            chunks: 1,
+            crc32: 7,
+            scans: 2,
+            regions: 3,
+            dropped: 0,
+        };
+        let ok = device_lines(&scans, &chunks, &end).join("\n");
+        let d = DeviceReport::read(&ok).expect("reads");
+        assert_eq!((d.scans.len(), d.chunks.len(), d.end), (2, 1, end));
+        let fault = |out: String| match DeviceReport::read(&out) {
+            Err(Error::Report(f)) => f,
+            Err(e) => panic!("another error: {e}"),
+            Ok(_) => panic!("accepted"),
+        };
+        // A scan report missing, one more, out of order; the end missing or followed by more.
+        assert!(matches!(
+            fault(device_lines(&scans[..1], &chunks, &end).join("\n")),
+            ReportFault::Missing { .. }
+        ));
+        assert!(matches!(
+            fault(device_lines(&[scan(0), scan(1), scan(2)], &chunks, &end).join("\n")),
+            ReportFault::Unexpected { .. }
+        ));
+        assert!(matches!(
+            fault(device_lines(&[scan(1), scan(0)], &chunks, &end).join("\n")),
+            ReportFault::Unexpected { .. }
+        ));
+        let mut no_end = device_lines(&scans, &chunks, &end);
+        no_end.pop();
+        assert!(matches!(
+            fault(no_end.join("\n")),
+            ReportFault::Missing { .. }
+        ));
+        assert!(matches!(
+            fault(format!(
+                "{ok}\n{}",
+                report_line(&Report::LidarScan(scan(2)))
+            )),
+            ReportFault::Unexpected { .. }
+        ));
+        // Chunks that do not add up to the bytes received.
+        let short = [LidarChunk {
+            bytes: 99,
+            scans: 1,
+        }];
+        assert!(matches!(
+            fault(device_lines(&scans, &short, &end).join("\n")),
+            ReportFault::Unexpected { .. }
+        ));
+        // A damaged line.
+        let damaged = ok.replacen("report: 03", "report: 13", 1);
+        assert!(matches!(fault(damaged), ReportFault::Malformed { .. }));
     }
 
     #[test]
