@@ -195,6 +195,70 @@ macro_rules! start_region {
     }};
 }
 
+/// Bytes as lowercase hex, written a few dozen characters at a time (one `write_str` each:
+/// under semihosting, one host call).
+#[derive(Clone, Copy, Debug)]
+pub struct Hex<'a>(pub &'a [u8]);
+
+impl fmt::Display for Hex<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        const DIGITS: &[u8; 16] = b"0123456789abcdef";
+        let mut text = [0u8; 64];
+        for piece in self.0.chunks(text.len() / 2) {
+            for (pair, &b) in text.chunks_exact_mut(2).zip(piece) {
+                if let [hi, lo] = pair {
+                    *hi = DIGITS.get(usize::from(b >> 4)).copied().unwrap_or(b'0');
+                    *lo = DIGITS.get(usize::from(b & 0xf)).copied().unwrap_or(b'0');
+                }
+            }
+            let used = text.get(..2 * piece.len()).unwrap_or_default();
+            f.write_str(core::str::from_utf8(used).map_err(|_| fmt::Error)?)?;
+        }
+        Ok(())
+    }
+}
+
+/// Sends a frame of the device link (`beamfield::link`) on the program's output as one line,
+/// `beamfield_fixtures::report::FRAME_LINE` and the frame's wire bytes (COBS and delimiter) in
+/// hex: `send_frame!(encoder, message)` with a `beamfield::link::Encoder` and a
+/// `beamfield::link::Message`. A message the encoder refuses is reported in words (the host
+/// then misses a frame and fails).
+///
+/// A macro for the reason given at [`start_region!`]: only the programs that send frames link
+/// the link's encoder and the fixtures crate.
+#[macro_export]
+macro_rules! send_frame {
+    ($encoder:expr, $message:expr) => {{
+        let mut wire = [0u8; beamfield::link::MAX_WIRE_LEN];
+        match $encoder.encode(&$message, &mut wire) {
+            Ok(n) => $crate::println!(
+                "{}{}",
+                beamfield_fixtures::report::FRAME_LINE,
+                $crate::Hex(wire.get(..n).unwrap_or_default())
+            ),
+            Err(e) => $crate::println!("link frame not encodable: {}", e),
+        }
+    }};
+}
+
+/// Sends a `beamfield_fixtures::report::Report` on the program's output as one line,
+/// `beamfield_fixtures::report::REPORT_LINE` and the report's bytes in hex. See
+/// [`send_frame!`].
+#[macro_export]
+macro_rules! send_report {
+    ($report:expr) => {{
+        let mut bytes = [0u8; beamfield_fixtures::report::MAX_REPORT_LEN];
+        match $report.encode(&mut bytes) {
+            Ok(n) => $crate::println!(
+                "{}{}",
+                beamfield_fixtures::report::REPORT_LINE,
+                $crate::Hex(bytes.get(..n).unwrap_or_default())
+            ),
+            Err(e) => $crate::println!("report not encodable: {}", e),
+        }
+    }};
+}
+
 /// Marks the end of a measured region; see [`bench_mark_start`].
 #[no_mangle]
 #[inline(never)]

@@ -40,6 +40,9 @@ pub enum Error {
     /// The counted regions do not pair with the names the firmware printed, or a region
     /// expected by name is missing or not expected.
     Regions(String),
+    /// The data a firmware program sent (its `frame:` and `report:` lines,
+    /// `beamfield_fixtures::report`) is malformed, or lacks or has more than the host expects.
+    Report(ReportFault),
     /// The device's report differs from the host's recomputation.
     Mismatch(String),
     /// The host's own run of a plan, or what it builds the device's input from, failed.
@@ -53,6 +56,46 @@ pub enum Error {
         /// The task that regenerates it.
         task: &'static str,
     },
+}
+
+/// What is wrong with the data a firmware program sent.
+#[derive(Debug)]
+pub enum ReportFault {
+    /// A data line whose bytes do not decode (hex, the link's decoder, the report's decoder).
+    Malformed {
+        /// The line's number in the program's output, from 1.
+        line: usize,
+        /// Why.
+        why: String,
+    },
+    /// The host expected this; the program's data ended.
+    Missing {
+        /// What the host expected.
+        expected: String,
+    },
+    /// The host expected something else, or nothing more.
+    Unexpected {
+        /// What the host expected.
+        expected: String,
+        /// What the program sent.
+        got: String,
+    },
+}
+
+impl fmt::Display for ReportFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ReportFault::Malformed { line, why } => {
+                write!(f, "the device's data line {line} does not decode: {why}")
+            }
+            ReportFault::Missing { expected } => {
+                write!(f, "the device's data ended; expected {expected}")
+            }
+            ReportFault::Unexpected { expected, got } => {
+                write!(f, "expected {expected}, the device sent {got}")
+            }
+        }
+    }
 }
 
 /// The result of a task step.
@@ -79,6 +122,7 @@ impl fmt::Display for Error {
                 "{} is stale: run `cargo xtask {task}` and commit it",
                 path.display()
             ),
+            Error::Report(fault) => fault.fmt(f),
             Error::Missing(m)
             | Error::Qemu(m)
             | Error::Output(m)

@@ -5,10 +5,12 @@
 
 use crate::cross::build_program;
 use crate::error::{Error, Result};
-use crate::insncount::{qemu_args, without_names, Regions};
+use crate::insncount::{qemu_args, Regions};
 use crate::process::repo_root;
 use crate::qemu::{ensure_qemu, failure, run_with_uart, Board};
+use crate::report::readable;
 use beamfield_fixtures::regions::lidar as regions;
+use beamfield_fixtures::report::LidarChunk;
 use std::fs;
 
 /// The firmware program.
@@ -67,7 +69,7 @@ pub fn lidar(count: bool, split: bool) -> Result {
     let uart = run_with_uart(&elf, READY, &header, stream, &extra)?;
     let run = &uart.finished;
     // The report, without the plugin's lines (they go to stderr) and the region names.
-    print!("{}", without_names(&run.stdout));
+    print!("{}", readable(&run.stdout));
     if run.code != 0 {
         eprint!("{}", run.stderr);
         return Err(failure(
@@ -78,58 +80,50 @@ pub fn lidar(count: bool, split: bool) -> Result {
         ));
     }
 
+    // The device's data: its reports, decoded (nothing below is read from its text).
+    let device = crate::lidar_ref::DeviceReport::read(&run.stdout)?;
+
     // 1. Transport: every byte, in order.
-    let line = run
-        .stdout
-        .lines()
-        .find_map(|l| l.strip_prefix("stream: received "))
-        .ok_or_else(|| Error::Output("the firmware printed no `stream: received` line".into()))?;
-    let bytes = line
-        .split_whitespace()
-        .next()
-        .and_then(|n| n.parse::<usize>().ok())
-        .ok_or_else(|| Error::Output(format!("cannot read the byte count in {line:?}")))?;
-    let crc = between(line, "crc32 ")
-        .and_then(|t| t.split(';').next())
-        .ok_or_else(|| Error::Output(format!("cannot read the CRC in {line:?}")))?;
-    let want = format!("{:08x}", CRC32.checksum(stream));
+    let want = CRC32.checksum(stream);
+    let (bytes, crc) = (device.end.received as usize, device.end.crc32);
     if bytes != stream.len() || crc != want {
         return Err(Error::Mismatch(format!(
-            "transport: sent {} bytes with crc32 {want}, the firmware received {bytes} with crc32 {crc}",
+            "transport: sent {} bytes with crc32 {want:08x}, the firmware received {bytes} with crc32 {crc:08x}",
             stream.len()
         )));
     }
     println!(
-        "transport: all {} bytes received in order through USART1 (crc32 {want} on both sides), {:.1} s in QEMU ({:.1} KB/s end to end)",
+        "transport: all {} bytes received in order through USART1 (crc32 {want:08x} on both sides), {:.1} s in QEMU ({:.1} KB/s end to end)",
         stream.len(),
         uart.elapsed.as_secs_f64(),
         stream.len() as f64 / 1e3 / uart.elapsed.as_secs_f64()
     );
 
-    // 2. The host's recomputation, to the printed digits.
+    // 2. The host's recomputation.
     let blob_path = repo_root().join("firmware/assets/intel.bin");
     let blob = fs::read(&blob_path).map_err(|e| Error::io(&blob_path, e))?;
     let reference = crate::lidar_ref::reference(stream, &blob)?;
-    let scans = crate::lidar_ref::check(&run.stdout, &reference)?;
+    let (scans, identical) = crate::lidar_ref::check(&device, &reference)?;
     println!(
-        "host reference: the host decodes, assembles and scores the same stream with the same crate: all {scans} scans (points, beams, log comparison, best pose, log-likelihood, ESS) and the decoder's and assembler's counters agree with the device's report to the printed digits"
+        "host reference: the host decodes, assembles and scores the same stream with the same crate: all {scans} scans (points, beams, log comparison exactly; best pose to 0.5 mm and 0.05 deg, log-likelihood to 0.0005, ESS to 0.05; {identical} of them bit for bit) and the decoder's and assembler's counters (exactly) agree with the device's reports"
     );
 
     // 3. What the plan alone says (not the code under test).
     let flips = crate::lidar_ref::FLIPS.len() as u32;
     let frames_ok = (plan.frames as u32) - flips;
-    if reference.frames_ok != frames_ok || reference.bad_checksum != flips {
+    let decoded = &reference.decoder;
+    if decoded.frames_ok != frames_ok || decoded.bad_checksum != flips {
         return Err(Error::Requirement(format!(
             "the plan has {frames_ok} intact frames and {flips} corrupted ones; the decoder passed {} and rejected {}",
-            reference.frames_ok, reference.bad_checksum
+            decoded.frames_ok, decoded.bad_checksum
         )));
     }
     // Every frame of the plan is a 360-point revolution's at 3,600 °/s (11° per frame, the
     // plausible span at that speed is up to 28.8°): none may be taken for damage.
-    if reference.implausible_frames != 0 {
+    if decoded.implausible_frames != 0 {
         return Err(Error::Requirement(format!(
             "the plan's frames are all plausible; the decoder took {} for damage",
-            reference.implausible_frames
+            decoded.implausible_frames
         )));
     }
     if reference.scans.len() != plan.scans {
@@ -141,10 +135,11 @@ pub fn lidar(count: bool, split: bool) -> Result {
     }
     let mut worst = (0.0f32, 0.0f32);
     for (k, s) in reference.scans.iter().enumerate() {
-        if s.wrong != 0 || s.missing != plan.missing[k] {
+        let r = &s.report;
+        if r.wrong != 0 || r.missing != plan.missing[k] {
             return Err(Error::Requirement(format!(
                 "scan {k}: the plan leaves {} beams missing and none wrong; the device has {} missing, {} wrong",
-                plan.missing[k], s.missing, s.wrong
+                plan.missing[k], r.missing, r.wrong
             )));
         }
         worst = (worst.0.max(s.offset.0), worst.1.max(s.offset.1.abs()));
@@ -180,33 +175,24 @@ pub fn lidar(count: bool, split: bool) -> Result {
     // 4. Instructions per received byte: decode + assembly against the CRC-32 baseline.
     if count {
         let counted = Regions::read(&run.stdout, &run.stderr)?;
-        let regions = line
-            .rsplit_once("; ")
-            .and_then(|(_, t)| t.strip_suffix(" counted regions"))
-            .and_then(|n| n.parse::<usize>().ok())
-            .ok_or_else(|| Error::Output(format!("cannot read the counted regions in {line:?}")))?;
+        let regions = device.end.regions as usize;
         if regions != counted.len() {
             return Err(Error::Regions(format!(
                 "the firmware marked {regions} regions, the plugin counted {}",
                 counted.len()
             )));
         }
-        per_byte(&run.stdout, &counted, stream.len(), split)?;
+        per_byte(&device.chunks, &counted, stream.len(), split)?;
     }
     Ok(())
 }
 
-/// The text after `key` in `line`.
-fn between<'a>(line: &'a str, key: &str) -> Option<&'a str> {
-    line.find(key).map(|i| &line[i + key.len()..])
-}
-
 /// Splits the counted regions into decode + assembly, decode alone (with `split`) and the CRC
-/// baseline by name, checks them against the firmware's `chunk` lines (each chunk: the decode +
+/// baseline by name, checks them against the firmware's `LidarChunk` reports (each chunk: the decode +
 /// assembly region, then with `split` the decoder alone, then the CRC; at the end, the
 /// assembler's finish), and prints the per-byte figures.
-fn per_byte(out: &str, counted: &Regions, bytes: usize, split: bool) -> Result {
-    let (decode, alone, crc) = split_regions(out, counted, bytes, split)?;
+fn per_byte(chunks: &[LidarChunk], counted: &Regions, bytes: usize, split: bool) -> Result {
+    let (decode, alone, crc) = split_regions(chunks, counted, bytes, split)?;
     let b = bytes as f64;
     let split_note = if split {
         format!(
@@ -226,22 +212,14 @@ fn per_byte(out: &str, counted: &Regions, bytes: usize, split: bool) -> Result {
 }
 
 /// The sums of the counted regions: (decode + assembly with the assembler's finish, decoder
-/// alone, CRC baseline), each region taken by name and as many times as the firmware's `chunk`
-/// lines say (see [`per_byte`]).
+/// alone, CRC baseline), each region taken by name and as many times as the firmware's
+/// `LidarChunk` reports say (see [`per_byte`]).
 fn split_regions(
-    out: &str,
+    chunks: &[LidarChunk],
     counted: &Regions,
     bytes: usize,
     split: bool,
 ) -> Result<(u64, u64, u64)> {
-    let chunks: Vec<u64> = out
-        .lines()
-        .filter_map(|l| {
-            let rest = l.strip_prefix("chunk ")?;
-            let (_, rest) = rest.split_once(": ")?;
-            rest.split_whitespace().next()?.parse().ok()
-        })
-        .collect();
     let expected: &[_] = if split {
         &regions::ALL
     } else {
@@ -255,14 +233,14 @@ fn split_regions(
     let n = chunks.len();
     if (decodes, alones, crcs) != (n, if split { n } else { 0 }, n) {
         return Err(Error::Regions(format!(
-            "the firmware's {n} chunk lines call for {n} decode and CRC regions each, it measured \
+            "the firmware's {n} chunk reports call for {n} decode and CRC regions each, it measured \
              {decodes} decode, {alones} decoder-alone and {crcs} CRC regions"
         )));
     }
-    let received: u64 = chunks.iter().sum();
+    let received: u64 = chunks.iter().map(|c| u64::from(c.bytes)).sum();
     if received != bytes as u64 {
         return Err(Error::Mismatch(format!(
-            "chunk lines add up to {received} bytes, {bytes} were sent"
+            "chunk reports add up to {received} bytes, {bytes} were sent"
         )));
     }
     Ok((decode + finish, alone, crc))
@@ -272,6 +250,7 @@ fn split_regions(
 mod tests {
     use super::split_regions;
     use crate::insncount::Regions;
+    use beamfield_fixtures::report::LidarChunk;
 
     /// The regions of `names` with the plugin's `counts`, as one run reports them.
     fn counted(names: &[&str], counts: &[u64]) -> Regions {
@@ -285,9 +264,14 @@ mod tests {
     }
 
     #[test]
-    fn regions_follow_the_chunk_lines() {
-        let out =
-            "chunk 0: 10 bytes, 1 scans finished\nscan 0 ...\nchunk 1: 5 bytes, 0 scans finished\n";
+    fn regions_follow_the_chunk_reports() {
+        let out = &[
+            LidarChunk {
+                bytes: 10,
+                scans: 1,
+            },
+            LidarChunk { bytes: 5, scans: 0 },
+        ];
         // Per chunk: decode + assembly, then the CRC; at the end, the finish.
         let plain = ["decode-assemble", "crc", "decode-assemble", "crc", "finish"];
         let r = counted(&plain, &[300, 7, 50, 3, 4]);

@@ -4,10 +4,13 @@
 //! recomputation of the device's report with the same crate and the same plan
 //! (`fixtures/src/lidar_plan.rs`, shared word for word with the firmware).
 
-use crate::error::{Error, Result};
+use crate::error::{Error, ReportFault, Result};
+use crate::report::{same_bits, unexpected_report, Items};
+use beamfield_fixtures::report::{LidarChunk, LidarEnd, LidarScan, Report};
 use beamfield_fixtures::{demo_plan, lidar_plan};
 
 use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
+use beamfield::lidar::{AssemblerStats, DecoderStats};
 use beamfield::Pose;
 use demo_plan::POSES;
 use host_tests::splitmix::Draws;
@@ -122,39 +125,24 @@ pub fn stream() -> Result<Stream> {
     })
 }
 
-/// The host's version of one scan line of the device's report.
+/// The host's version of one scan of the device's report.
 pub struct ScanRef {
-    /// Everything up to the best pose, integers only: must equal the device's text.
-    pub head: String,
-    /// Best pose of the coarse grid.
-    pub best: Pose,
-    /// Tempered log-likelihood at the best pose.
-    pub log_likelihood: f32,
-    /// Effective sample size of the grid's weights.
-    pub ess: f32,
+    /// The report the device must send (integers exactly, floats to the tolerances of
+    /// [`check`]).
+    pub report: LidarScan,
     /// The best pose's distance (m) and heading difference (°) from the logged pose.
     pub offset: (f32, f32),
-    /// Beams missing against the log (for the plan's check).
-    pub missing: u16,
-    /// Beams that differ from the log.
-    pub wrong: u16,
 }
 
-/// The host's run of the device's pipeline over `bytes`: per scan line and the two counter
-/// lines, as the device prints them (integers), or the floats to compare.
+/// The host's run of the device's pipeline over `bytes`: per scan its report, and the
+/// decoder's and the assembler's counters.
 pub struct Reference {
     /// One per assembled scan, in order.
     pub scans: Vec<ScanRef>,
-    /// The decoder's counter line.
-    pub decoder: String,
-    /// The assembler's counter line.
-    pub assembler: String,
-    /// Frames whose checksum passed, and failed.
-    pub frames_ok: u32,
-    /// See `frames_ok`.
-    pub bad_checksum: u32,
-    /// Frames whose checksum passed but that no LD06 can send (speed or span out of bounds).
-    pub implausible_frames: u32,
+    /// The decoder's counters.
+    pub decoder: DecoderStats,
+    /// The assembler's counters.
+    pub assembler: AssemblerStats,
 }
 
 /// Decodes, assembles and scores `bytes` on the host exactly as the firmware does.
@@ -182,21 +170,14 @@ pub fn reference(bytes: &[u8], blob: &[u8]) -> Result<Reference> {
             .map_err(|e| Error::Host(format!("scan {k}: {e}")))?;
         let (d_m, dth_deg, _) = demo_plan::offset(&s.best, &logged);
         scans.push(ScanRef {
-            head: format!(
-                "scan {k} (log line {}): {} points; {} beams valid; vs log: {} match, {} missing, {} wrong; best (",
+            report: LidarScan::of(
+                k as u32,
                 demo.log_index,
                 assembler.revolution().points,
-                s.valid,
-                m.matching,
-                m.missing,
-                m.wrong
+                &m,
+                &s,
             ),
-            best: s.best,
-            log_likelihood: s.log_likelihood,
-            ess: s.ess,
             offset: (d_m, dth_deg),
-            missing: m.missing,
-            wrong: m.wrong,
         });
         Ok(())
     };
@@ -213,122 +194,175 @@ pub fn reference(bytes: &[u8], blob: &[u8]) -> Result<Reference> {
         result = result.and_then(|()| one(&assembler, &mut scans));
     }
     result?;
-    let d = decoder.stats();
-    let a = assembler.stats();
     Ok(Reference {
         scans,
-        decoder: format!(
-            "decoder: {} bytes, {} frames ok, {} bad checksums, {} bad frames, {} bytes skipped in {} resyncs, {} points",
-            d.bytes, d.frames_ok, d.bad_checksum, d.bad_frames, d.skipped_bytes, d.resyncs, d.points
-        ),
-        assembler: format!(
-            "assembler: {} points, {} accepted, {} flagged invalid, {} out of range, {} low quality, {} bad angle, {} outside the layout, {} replaced, {} revolutions",
-            a.points,
-            a.accepted,
-            a.flagged_invalid,
-            a.out_of_range,
-            a.low_quality,
-            a.bad_angle,
-            a.outside_layout,
-            a.replaced,
-            a.revolutions
-        ),
-        frames_ok: d.frames_ok,
-        bad_checksum: d.bad_checksum,
-        implausible_frames: d.implausible_frames,
+        decoder: decoder.stats(),
+        assembler: assembler.stats(),
     })
 }
 
-/// The text between `start` and the next `end` after it.
-fn between<'a>(line: &'a str, start: &str, end: &str) -> Option<&'a str> {
-    let from = line.find(start)? + start.len();
-    let rest = line.get(from..)?;
-    rest.get(..rest.find(end)?)
+/// What the device reported, decoded from its data lines: per scan, per chunk, at the end.
+pub struct DeviceReport {
+    /// The `LidarScan` reports, in order.
+    pub scans: Vec<LidarScan>,
+    /// The `LidarChunk` reports, in order.
+    pub chunks: Vec<LidarChunk>,
+    /// The `LidarEnd` report.
+    pub end: LidarEnd,
 }
 
-/// Checks a printed number against the host's value printed with `decimals` digits (the
-/// firmware rounds to the nearest: they agree when within half a unit of the last digit).
-fn close(what: &str, printed: &str, host: f32, decimals: i32) -> Result<()> {
-    let p: f64 = printed
-        .trim()
-        .parse()
-        .map_err(|_| Error::Output(format!("{what}: cannot read {printed:?}")))?;
+impl DeviceReport {
+    /// Reads the data of the program's output `out`: `LidarScan` and `LidarChunk` reports, then
+    /// one `LidarEnd` and nothing after it; as many scans and chunks as the end report counts,
+    /// the scans numbered in order, the chunks' bytes adding up to those received, the scans
+    /// finished in chunks plus at most one at the end making up the scans.
+    ///
+    /// # Errors
+    /// [`Error::Report`] for a line that does not decode, a report missing, of another kind,
+    /// or one more.
+    pub fn read(out: &str) -> Result<Self> {
+        let mut items = Items::new(out)?;
+        let (mut scans, mut chunks) = (Vec::new(), Vec::new());
+        let what = "a LidarScan, LidarChunk or LidarEnd report";
+        let end = loop {
+            match items.report(what)? {
+                Report::LidarScan(s) => {
+                    if s.scan as usize != scans.len() {
+                        return Err(unexpected_report(
+                            &format!("the report of scan {}", scans.len()),
+                            &Report::LidarScan(s),
+                        ));
+                    }
+                    scans.push(s);
+                }
+                Report::LidarChunk(c) => chunks.push(c),
+                Report::LidarEnd(e) => break e,
+                other => return Err(unexpected_report(what, &other)),
+            }
+        };
+        items.end()?;
+        let counted = |n: usize, what: &str, reported: u32| -> Result {
+            match n.cmp(&(reported as usize)) {
+                std::cmp::Ordering::Equal => Ok(()),
+                std::cmp::Ordering::Less => Err(Error::Report(ReportFault::Missing {
+                    expected: format!(
+                        "{reported} {what} reports (the LidarEnd's count), {n} were sent"
+                    ),
+                })),
+                std::cmp::Ordering::Greater => Err(Error::Report(ReportFault::Unexpected {
+                    expected: format!("{reported} {what} reports (the LidarEnd's count)"),
+                    got: format!("{n}"),
+                })),
+            }
+        };
+        counted(scans.len(), "LidarScan", end.scans)?;
+        counted(chunks.len(), "LidarChunk", end.chunks)?;
+        let chunk_bytes: u64 = chunks.iter().map(|c| u64::from(c.bytes)).sum();
+        let in_chunks: u64 = chunks.iter().map(|c| u64::from(c.scans)).sum();
+        if chunk_bytes != u64::from(end.received)
+            || !(in_chunks..=in_chunks + 1).contains(&(scans.len() as u64))
+        {
+            return Err(Error::Report(ReportFault::Unexpected {
+                expected: format!(
+                    "chunks of {} bytes in all with {} or {} scans",
+                    end.received,
+                    scans.len().saturating_sub(1),
+                    scans.len()
+                ),
+                got: format!("chunks of {chunk_bytes} bytes with {in_chunks} scans"),
+            }));
+        }
+        Ok(Self { scans, chunks, end })
+    }
+}
+
+/// Checks the device's value `device` against the host's `host` to the tolerance of the
+/// readable report: half a unit of its last digit with `decimals` digits (as when the device
+/// printed them with `decimals` digits and the host compared those).
+fn close(what: &str, device: f32, host: f32, decimals: i32) -> Result<()> {
     let tol = 0.5 * 10f64.powi(-decimals) + 1e-9;
-    if (p - f64::from(host)).abs() <= tol {
+    if (f64::from(device) - f64::from(host)).abs() <= tol {
         Ok(())
     } else {
         Err(Error::Mismatch(format!(
-            "{what}: device printed {printed}, host computes {host:.6}"
+            "{what}: the device reports {device}, the host computes {host} (tolerance {tol:.1e})"
         )))
     }
 }
 
-/// Checks the device's report `out` against the host's `reference`, line by line: the
-/// integers exactly, the printed decimals to their last digit. Returns the number of scans.
-pub fn check(out: &str, r: &Reference) -> Result<usize> {
-    let lines: Vec<&str> = out.lines().collect();
-    let scan_lines: Vec<&str> = lines
-        .iter()
-        .copied()
-        .filter(|l| l.starts_with("scan "))
-        .collect();
-    if scan_lines.len() != r.scans.len() {
+/// Checks the device's report `d` against the host's `reference`: every scan's integers
+/// (index, log line, points, beams valid, matching, missing, wrong) exactly, its best pose to
+/// 0.5 mm and 0.05°, log-likelihood to 0.0005 and ESS to 0.05; the decoder's and the
+/// assembler's counters exactly. Returns the number of scans and how many of them are equal
+/// bit for bit as well.
+pub fn check(d: &DeviceReport, r: &Reference) -> Result<(usize, usize)> {
+    if d.scans.len() != r.scans.len() {
         return Err(Error::Mismatch(format!(
             "the device reported {} scans, the host assembles {}",
-            scan_lines.len(),
+            d.scans.len(),
             r.scans.len()
         )));
     }
-    for (k, (line, s)) in scan_lines.iter().zip(&r.scans).enumerate() {
-        if !line.starts_with(&s.head) {
+    let mut identical = 0;
+    for (k, (got, s)) in d.scans.iter().zip(&r.scans).enumerate() {
+        let want = &s.report;
+        let ints = |x: &LidarScan| {
+            (
+                x.scan,
+                x.log_index,
+                x.points,
+                x.valid,
+                x.matching,
+                x.missing,
+                x.wrong,
+            )
+        };
+        if ints(got) != ints(want) {
             return Err(Error::Mismatch(format!(
-                "scan {k}: the device printed\n  {line}\nthe host computes\n  {}…",
-                s.head
+                "scan {k}: the device reports\n  {got:?}\nthe host computes\n  {want:?}"
             )));
         }
-        let pose = between(line, "best (", " deg)")
-            .ok_or_else(|| Error::Output(format!("scan {k}: no best pose in {line:?}")))?;
-        let p: Vec<&str> = pose.split(", ").collect();
-        let [x, y, t] = p.as_slice() else {
-            return Err(Error::Output(format!(
-                "scan {k}: cannot read the pose {pose:?}"
-            )));
-        };
-        close(&format!("scan {k} best x"), x, s.best.x_m, 3)?;
-        close(&format!("scan {k} best y"), y, s.best.y_m, 3)?;
+        close(&format!("scan {k} best x"), got.best.x_m, want.best.x_m, 3)?;
+        close(&format!("scan {k} best y"), got.best.y_m, want.best.y_m, 3)?;
         close(
-            &format!("scan {k} best θ"),
-            t,
-            s.best.theta_rad.to_degrees(),
+            &format!("scan {k} best θ (degrees)"),
+            got.best.theta_rad.to_degrees(),
+            want.best.theta_rad.to_degrees(),
             1,
         )?;
-        let ll = between(line, "log-likelihood ", " ")
-            .ok_or_else(|| Error::Output(format!("scan {k}: no log-likelihood in {line:?}")))?;
-        close(&format!("scan {k} log-likelihood"), ll, s.log_likelihood, 3)?;
-        let ess = line
-            .rsplit_once("ESS ")
-            .map(|(_, e)| e)
-            .ok_or_else(|| Error::Output(format!("scan {k}: no ESS in {line:?}")))?;
-        close(&format!("scan {k} ESS"), ess, s.ess, 1)?;
+        close(
+            &format!("scan {k} log-likelihood"),
+            got.log_likelihood,
+            want.log_likelihood,
+            3,
+        )?;
+        close(&format!("scan {k} ESS"), got.ess, want.ess, 1)?;
+        identical += usize::from(same_bits(
+            &Report::LidarScan(*got),
+            &Report::LidarScan(*want),
+        ));
     }
-    for want in [&r.decoder, &r.assembler] {
-        let key = want.split(':').next().unwrap_or("");
-        let got = lines
-            .iter()
-            .find(|l| l.starts_with(&format!("{key}:")))
-            .ok_or_else(|| Error::Output(format!("the device printed no `{key}:` line")))?;
-        if got != want {
-            return Err(Error::Mismatch(format!(
-                "the device printed\n  {got}\nthe host computes\n  {want}"
-            )));
-        }
+    if d.end.decoder != r.decoder {
+        return Err(Error::Mismatch(format!(
+            "the decoder's counters differ:\n  device: {:?}\n  host:   {:?}",
+            d.end.decoder, r.decoder
+        )));
     }
-    Ok(r.scans.len())
+    if d.end.assembler != r.assembler {
+        return Err(Error::Mismatch(format!(
+            "the assembler's counters differ:\n  device: {:?}\n  host:   {:?}",
+            d.end.assembler, r.assembler
+        )));
+    }
+    Ok((r.scans.len(), identical))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{beam_at, close, stream, FLIPS};
+    use super::{beam_at, close, stream, DeviceReport, FLIPS};
+    use crate::error::{Error, ReportFault};
+    use crate::report::report_line;
+    use beamfield_fixtures::report::{LidarChunk, LidarEnd, LidarScan, Report};
 
     #[test]
     fn clockwise_degrees_map_to_the_flaser_beams() {
@@ -349,10 +383,98 @@ mod tests {
         assert!(s.missing.iter().all(|&m| m <= 12));
     }
 
+    /// The data lines of a run: scans, chunks and the end report.
+    fn device_lines(scans: &[LidarScan], chunks: &[LidarChunk], end: &LidarEnd) -> Vec<String> {
+        let mut out: Vec<String> = scans
+            .iter()
+            .map(|s| report_line(&Report::LidarScan(*s)))
+            .collect();
+        out.extend(chunks.iter().map(|c| report_line(&Report::LidarChunk(*c))));
+        out.push(report_line(&Report::LidarEnd(*end)));
+        out
+    }
+
     #[test]
-    fn printed_digits_agree_within_half_a_unit() {
-        assert!(close("x", "9.909", 9.9094, 3).is_ok());
-        assert!(close("x", "9.909", 9.9096, 3).is_err());
-        assert!(close("x", "-0.5", -0.54, 1).is_ok());
+    fn the_device_report_is_read_whole_and_a_missing_or_extra_report_is_an_error() {
+        let scan = |k: u32| LidarScan {
+            scan: k,
+            log_index: 300 + k,
+            points: 360,
+            valid: 180,
+            matching: 180,
+            missing: 0,
+            wrong: 0,
+            best: beamfield::Pose::new(1.0, 2.0, 0.5),
+            log_likelihood: 30.0,
+            ess: 20.0,
+        };
+        let scans = [scan(0), scan(1)];
+        let chunks = [LidarChunk {
+            bytes: 100,
+            scans: 1,
+        }];
+        let end = LidarEnd {
+            decoder: Default::default(),
+            assembler: Default::default(),
+            received: 100,
+            chunks: 1,
+            crc32: 7,
+            scans: 2,
+            regions: 3,
+            dropped: 0,
+        };
+        let ok = device_lines(&scans, &chunks, &end).join("\n");
+        let d = DeviceReport::read(&ok).expect("reads");
+        assert_eq!((d.scans.len(), d.chunks.len(), d.end), (2, 1, end));
+        let fault = |out: String| match DeviceReport::read(&out) {
+            Err(Error::Report(f)) => f,
+            Err(e) => panic!("another error: {e}"),
+            Ok(_) => panic!("accepted"),
+        };
+        // A scan report missing, one more, out of order; the end missing or followed by more.
+        assert!(matches!(
+            fault(device_lines(&scans[..1], &chunks, &end).join("\n")),
+            ReportFault::Missing { .. }
+        ));
+        assert!(matches!(
+            fault(device_lines(&[scan(0), scan(1), scan(2)], &chunks, &end).join("\n")),
+            ReportFault::Unexpected { .. }
+        ));
+        assert!(matches!(
+            fault(device_lines(&[scan(1), scan(0)], &chunks, &end).join("\n")),
+            ReportFault::Unexpected { .. }
+        ));
+        let mut no_end = device_lines(&scans, &chunks, &end);
+        no_end.pop();
+        assert!(matches!(
+            fault(no_end.join("\n")),
+            ReportFault::Missing { .. }
+        ));
+        assert!(matches!(
+            fault(format!(
+                "{ok}\n{}",
+                report_line(&Report::LidarScan(scan(2)))
+            )),
+            ReportFault::Unexpected { .. }
+        ));
+        // Chunks that do not add up to the bytes received.
+        let short = [LidarChunk {
+            bytes: 99,
+            scans: 1,
+        }];
+        assert!(matches!(
+            fault(device_lines(&scans, &short, &end).join("\n")),
+            ReportFault::Unexpected { .. }
+        ));
+        // A damaged line.
+        let damaged = ok.replacen("report: 03", "report: 13", 1);
+        assert!(matches!(fault(damaged), ReportFault::Malformed { .. }));
+    }
+
+    #[test]
+    fn values_agree_within_half_a_unit_of_the_last_digit() {
+        assert!(close("x", 9.909, 9.9094, 3).is_ok());
+        assert!(close("x", 9.909, 9.9096, 3).is_err());
+        assert!(close("x", -0.5, -0.54, 1).is_ok());
     }
 }

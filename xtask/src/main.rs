@@ -5,6 +5,7 @@
 //! [`toolchain`] (rustup targets, LLVM tools, gcc), [`qemu`] (boards and QEMU runs),
 //! [`insncount`] (the counting plugin and the named regions), [`cross`] (firmware and
 //! cross builds), [`elf`] (sections, symbols, memory layouts), [`error`] (the one error type),
+//! [`report`] (the data the firmware programs send: link frames and test reports, decoded),
 //! and one module per task.
 
 mod budget_run;
@@ -23,6 +24,7 @@ mod lidar_ref;
 mod nopanic;
 mod process;
 mod qemu;
+mod report;
 mod robot;
 mod ros2;
 mod toolchain;
@@ -99,8 +101,9 @@ enum Task {
     Willow,
     /// Track a real Intel log segment with the localizer on the device
     /// (firmware/src/bin/track.rs: 90 scans, 500 particles) under QEMU, recompute the same track
-    /// on the host with the same library code, and fail on any difference in the printed bit
-    /// patterns, or when the tracking RMSE is over its bound.
+    /// on the host with the same library code, and fail on any difference in the reported
+    /// values (the device's Estimate frames and track reports, decoded, bit for bit), or when
+    /// the tracking RMSE is over its bound.
     ///
     /// The input is fixtures/assets/track.rs (`cargo xtask track-assets`; a host test checks it
     /// is current).
@@ -147,8 +150,9 @@ enum Task {
     /// library's encoder,
     /// with line noise and 3 corrupted frames. Builds the program for the STM32F405 layout,
     /// starts QEMU with USART1 on a Unix socket, waits for the firmware's ready line, sends the
-    /// stream, and checks the report: every byte received in order (count and CRC-32); the
-    /// host's recomputation (decode, assembly, scores, counters) to the printed digits; what the
+    /// stream, and checks the device's reports (data lines, decoded): every byte received in
+    /// order (count and CRC-32); the host's recomputation (decode, assembly, scores, counters)
+    /// within the readable line's last digit, integers exactly; what the
     /// stream's plan says (frames rejected, beams missing, none wrong, best poses near the
     /// logged ones); and prints the instructions per received byte of decode + assembly (QEMU
     /// counting plugin, needs gcc and llvm-nm).

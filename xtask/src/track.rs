@@ -7,13 +7,16 @@ use crate::cross::build_program;
 use crate::demo::build_and_run;
 use crate::elf::sections;
 use crate::error::{Error, Result};
-use crate::insncount::{run_counted, without_names, Regions};
+use crate::insncount::{run_counted, Regions};
 use crate::process::{cargo, repo_root, run, Finished};
 use crate::qemu::{failure, Board};
+use crate::report::{estimate_bits, readable, same_bits, unexpected_report, Items};
 use crate::toolchain::llvm_tool;
+use beamfield::link;
 use beamfield::mcl::Particles;
 use beamfield_fixtures::regions::track as regions;
-use beamfield_fixtures::track_plan::{self, Step, Summary, PARTICLES};
+use beamfield_fixtures::report::{track_estimate, Report, TrackStep, TrackSummary};
+use beamfield_fixtures::track_plan::{self, Summary, PARTICLES};
 use track_plan::asset::{MAX_RANGE_M, ODOM_ALPHA, SEED, TRACK};
 
 /// Translation RMSE over the segment the run must stay under, metres. `beamfield track
@@ -27,37 +30,19 @@ pub const MAX_HEADING_RMSE_DEG: f64 = 2.0;
 /// "lost"; the ten seeds' largest error: 0.097 / 0.144 / 0.289 m).
 pub const LOST_M: f64 = 0.5;
 
-/// The bit-pattern part of the device's line for one update:
-/// `update K (scan L): bits X Y T ess E particles H`.
-fn step_line(s: &Step) -> String {
-    let e = &s.estimate;
-    format!(
-        "update {} (scan {}): bits {:08x} {:08x} {:08x} ess {:08x} particles {:08x}",
-        s.k,
-        TRACK.get(s.k).map_or(0, |t| t.log_index),
-        e.pose.x_m.to_bits(),
-        e.pose.y_m.to_bits(),
-        e.pose.theta_rad.to_bits(),
-        e.ess.to_bits(),
-        s.particles_hash,
-    )
+/// What the host computes for one update: the estimate frame's message and the step report
+/// the device must send.
+struct HostStep {
+    estimate: link::Estimate,
+    step: Report,
 }
 
-/// The bit patterns of the device's final line: `(bits R H)`.
-fn summary_bits(s: &Summary) -> String {
-    format!(
-        "(bits {:016x} {:016x})",
-        s.trans_rmse_m.to_bits(),
-        s.heading_rmse_deg.to_bits()
-    )
-}
-
-/// The host's run of the plan: one line per update and the summary.
-fn host_run() -> Result<(Vec<String>, Summary)> {
+/// The host's run of the plan: every update's estimate and report, and the summary.
+fn host_run() -> Result<(Vec<HostStep>, Summary)> {
     let blob_path = repo_root().join("firmware/assets/intel.bin");
     let blob = std::fs::read(&blob_path).map_err(|e| Error::io(&blob_path, e))?;
     let mut store: Box<Particles<PARTICLES>> = Box::default();
-    let mut lines = Vec::new();
+    let mut steps = Vec::new();
     let sum = track_plan::run(
         &mut store,
         &blob,
@@ -66,48 +51,71 @@ fn host_run() -> Result<(Vec<String>, Summary)> {
         ODOM_ALPHA,
         SEED,
         |_| {},
-        |s| lines.push(step_line(s)),
+        |s| {
+            let log_index = TRACK.get(s.k).map_or(0, |t| t.log_index);
+            steps.push(HostStep {
+                estimate: track_estimate(s),
+                step: Report::TrackStep(TrackStep::of(s, log_index)),
+            });
+        },
     )
     .map_err(|e| Error::Host(format!("host run: {e}")))?;
-    Ok((lines, sum))
+    Ok((steps, sum))
 }
 
-/// Checks the device's output `out` against the host's run: every update's line (estimate,
-/// ESS and particle hash bit patterns) and the final RMSE bit patterns; then the tracking
-/// bounds. Returns the summary lines.
+/// Checks the device's data in its output `out` against the host's run: per update, its
+/// `Estimate` frame (sequence number, pose, covariance, ESS, flags) and its `TrackStep` report
+/// (scan, particle hash, skipped, errors), then the `TrackSummary` (RMSE, final and largest
+/// error, resamplings), all bit for bit, and nothing more; then the tracking bounds. Returns
+/// the summary lines.
 ///
 /// # Errors
-/// The first difference, a missing line, or a bound not met.
+/// The first difference ([`Error::Mismatch`]), a data line that does not decode, one missing or
+/// one more ([`Error::Report`]), or a bound not met.
 pub fn check(out: &str) -> Result<Vec<String>> {
     let (host, sum) = host_run()?;
-    let device: Vec<&str> = out.lines().filter(|l| l.starts_with("update ")).collect();
-    if device.len() != host.len() {
-        return Err(Error::Mismatch(format!(
-            "the device printed {} update lines, the host computes {}",
-            device.len(),
-            host.len()
-        )));
-    }
-    for (d, h) in device.iter().zip(&host) {
-        if !d.starts_with(&format!("{h};")) {
+    let mut items = Items::new(out)?;
+    for (k, h) in host.iter().enumerate() {
+        let what = format!("the Estimate frame of update {k}");
+        let (seq, e) = items.estimate(&what)?;
+        if usize::from(seq) != k || estimate_bits(&e) != estimate_bits(&h.estimate) {
             return Err(Error::Mismatch(format!(
-                "the device and the host differ:\n  device: {d}\n  host:   {h}"
+                "update {k}: the device's estimate differs from the host's (bit patterns: \
+                 timestamp, x, y, θ, covariance, ESS, flags, quality state and score):\n  \
+                 device: seq {seq} {:08x?}\n  host:   seq {k} {:08x?}",
+                estimate_bits(&e),
+                estimate_bits(&h.estimate)
+            )));
+        }
+        let what = format!("the TrackStep report of update {k}");
+        let r = items.report(&what)?;
+        if !matches!(r, Report::TrackStep(_)) {
+            return Err(unexpected_report(&what, &r));
+        }
+        if !same_bits(&r, &h.step) {
+            return Err(Error::Mismatch(format!(
+                "update {k}: the device and the host differ:\n  device: {r:?}\n  host:   {:?}",
+                h.step
             )));
         }
     }
-    let last = out
-        .lines()
-        .find(|l| l.starts_with("final error "))
-        .ok_or_else(|| Error::Output("the device printed no final line".into()))?;
-    let bits = summary_bits(&sum);
-    if !last.contains(&bits) {
+    let what = "the TrackSummary report";
+    let r = items.report(what)?;
+    let want = Report::TrackSummary(TrackSummary::of(&sum));
+    if !matches!(r, Report::TrackSummary(_)) {
+        return Err(unexpected_report(what, &r));
+    }
+    if !same_bits(&r, &want) {
         return Err(Error::Mismatch(format!(
-            "final RMSE differs: the host computes {bits}, the device printed {last:?}"
+            "the summaries differ:\n  device: {r:?}\n  host:   {want:?}"
         )));
     }
+    items.end()?;
     let mut report = vec![format!(
         "host reference: {} updates recomputed on the host are bit-identical to the device's \
-         (estimate x, y, θ, ESS, a hash of all {PARTICLES} particles' poses and weights, and the RMSE)",
+         reports, decoded from its data (each Estimate frame's x, y, θ, covariance and ESS, a \
+         hash of all {PARTICLES} particles' poses and weights, the errors, and the summary's \
+         RMSE, final and largest errors)",
         host.len()
     )];
     let rmse_cm = sum.trans_rmse_m * 100.0;
@@ -145,7 +153,7 @@ pub fn track(board: Board) -> Result {
         stdout: out,
         stderr: err,
     } = build_and_run(board, "track", &[])?;
-    print!("{}", without_names(&out));
+    print!("{}", readable(&out));
     eprint!("{err}");
     match code {
         0 => {
@@ -261,23 +269,86 @@ pub fn track_assets() -> Result {
 
 #[cfg(test)]
 mod tests {
-    use super::check;
+    use super::{check, host_run, Report, TrackSummary};
+    use crate::error::{Error, ReportFault};
+    use crate::report::{frame_line, report_line};
+    use beamfield::link::Message;
+    use beamfield_fixtures::report::TrackStep;
 
     #[test]
-    fn a_changed_bit_or_a_missing_line_fails_the_check() {
-        let (host, sum) = super::host_run().expect("host run");
-        let mut out: Vec<String> = host.iter().map(|h| format!("{h}; readable part")).collect();
-        out.push(format!("final error x {} y", super::summary_bits(&sum)));
-        assert!(check(&out.join("\n")).is_ok());
-        let mut flipped = out.clone();
-        flipped[40] = flipped[40].replacen("particles ", "particles 0", 1);
-        assert!(check(&flipped.join("\n")).is_err());
-        let mut missing = out.clone();
-        missing.remove(10);
-        assert!(check(&missing.join("\n")).is_err());
-        let mut last = out;
-        last.pop();
-        last.push("final error x (bits 0000000000000000 0000000000000000) y".into());
-        assert!(check(&last.join("\n")).is_err());
+    fn a_changed_bit_or_a_missing_or_extra_report_fails_the_check() {
+        let (host, sum) = host_run().expect("host run");
+        let summary = Report::TrackSummary(TrackSummary::of(&sum));
+        let lines = |steps: &[(Message, Report)], last: &Report| -> String {
+            let mut out: Vec<String> = Vec::new();
+            for (k, (m, r)) in steps.iter().enumerate() {
+                out.push(frame_line(k as u16, m));
+                out.push(report_line(r));
+                out.push(format!("update {k}: words for a person"));
+            }
+            out.push(report_line(last));
+            out.join("\n")
+        };
+        let steps: Vec<(Message, Report)> = host
+            .iter()
+            .map(|h| (Message::Estimate(h.estimate), h.step))
+            .collect();
+        assert!(check(&lines(&steps, &summary)).is_ok());
+        // One bit of one particle hash.
+        let mut flipped = steps.clone();
+        if let Report::TrackStep(s) = &mut flipped[40].1 {
+            s.particles_hash ^= 1;
+        }
+        assert!(matches!(
+            check(&lines(&flipped, &summary)),
+            Err(Error::Mismatch(_))
+        ));
+        // One bit of one covariance entry (kept symmetric, so that it encodes).
+        let mut cov = steps.clone();
+        if let Message::Estimate(e) = &mut cov[7].0 {
+            let v = f32::from_bits(e.covariance[0][0].to_bits() ^ 1);
+            e.covariance[0][0] = v;
+        }
+        assert!(matches!(
+            check(&lines(&cov, &summary)),
+            Err(Error::Mismatch(_))
+        ));
+        // One RMSE bit.
+        let mut last = summary;
+        if let Report::TrackSummary(s) = &mut last {
+            s.trans_rmse_m = f64::from_bits(s.trans_rmse_m.to_bits() ^ 1);
+        }
+        assert!(matches!(
+            check(&lines(&steps, &last)),
+            Err(Error::Mismatch(_))
+        ));
+        // An update's data missing (the sequence numbers then have no gap, but one is short).
+        assert!(matches!(
+            check(&lines(&steps[..89], &summary)),
+            Err(Error::Report(ReportFault::Unexpected { .. }))
+        ));
+        // The summary missing, one report more, a report of the wrong kind.
+        let all = lines(&steps, &summary);
+        let without_summary = all.rsplit_once('\n').map(|(a, _)| a).unwrap();
+        assert!(matches!(
+            check(without_summary),
+            Err(Error::Report(ReportFault::Missing { .. }))
+        ));
+        assert!(matches!(
+            check(&format!("{all}\n{}", report_line(&summary))),
+            Err(Error::Report(ReportFault::Unexpected { .. }))
+        ));
+        let wrong_kind = Report::TrackStep(TrackStep {
+            update: 90,
+            log_index: 0,
+            particles_hash: 0,
+            skipped: false,
+            trans_err_m: 0.0,
+            heading_err_deg: 0.0,
+        });
+        assert!(matches!(
+            check(&lines(&steps, &wrong_kind)),
+            Err(Error::Report(ReportFault::Unexpected { .. }))
+        ));
     }
 }

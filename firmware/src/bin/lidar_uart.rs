@@ -22,6 +22,11 @@
 //! assembler's counters, and the byte count and CRC-32 of everything received, which the host
 //! compares with what it sent.
 //!
+//! The results go to the host as data (`beamfield_fixtures::report`): a [`LidarScan`] report
+//! per scored scan, a [`LidarChunk`] per chunk, a [`LidarEnd`] with the counters and the
+//! stream's byte count, CRC-32 and regions, each a `report: <hex>` line outside the counted
+//! regions; the lines in words beside them are for a person.
+//!
 //! Exit status 1 when a scan could not be scored, had a beam that differs from the log, or more
 //! scans were assembled than sent.
 #![no_std]
@@ -31,8 +36,9 @@ use beamfield::lidar::ld06::Ld06Decoder;
 use beamfield::lidar::ScanAssembler;
 use beamfield::{Pose, Scan};
 use beamfield_firmware::usart::{UsartRx, LD06_CONFIG};
-use beamfield_firmware::{bench_mark_end, exit, println, start_region, Fixed};
+use beamfield_firmware::{bench_mark_end, exit, println, send_report, start_region, Fixed};
 use beamfield_fixtures::regions::lidar;
+use beamfield_fixtures::report::{LidarChunk, LidarEnd, LidarScan, Report};
 use cortex_m_rt::entry;
 use panic_semihosting as _;
 
@@ -73,6 +79,13 @@ fn report(k: usize, setup: &Setup<'_>, done: &Finished, weights: &mut [f32; POSE
         }
     };
     let (d_m, dth_deg, _) = offset(&scored.best, &logged);
+    send_report!(Report::LidarScan(LidarScan::of(
+        u32::try_from(k).unwrap_or(u32::MAX),
+        demo.log_index,
+        done.points,
+        &m,
+        &scored
+    )));
     println!(
         "scan {} (log line {}): {} points; {} beams valid; vs log: {} match, {} missing, {} wrong; best ({}, {}, {} deg) offset {} cm {} deg; log-likelihood {} ESS {}",
         k,
@@ -268,6 +281,10 @@ fn main() -> ! {
         crc_chunk(&mut digest, chunk);
         bench_mark_end();
         regions += 1;
+        send_report!(Report::LidarChunk(LidarChunk {
+            bytes: u32::try_from(n).unwrap_or(u32::MAX),
+            scans: u32::try_from(finished).unwrap_or(u32::MAX),
+        }));
         println!("chunk {}: {} bytes, {} scans finished", chunks, n, finished);
         done += n;
         chunks += 1;
@@ -303,6 +320,17 @@ fn main() -> ! {
         d.bytes, d.frames_ok, d.bad_checksum, d.bad_frames, d.skipped_bytes, d.resyncs, d.points
     );
     let a = assembler.stats();
+    let crc32 = digest.finalize();
+    send_report!(Report::LidarEnd(LidarEnd {
+        decoder: d,
+        assembler: a,
+        received: u32::try_from(done).unwrap_or(u32::MAX),
+        chunks,
+        crc32,
+        scans: u32::try_from(scans).unwrap_or(u32::MAX),
+        regions,
+        dropped: queue.dropped,
+    }));
     println!(
         "assembler: {} points, {} accepted, {} flagged invalid, {} out of range, {} low quality, {} bad angle, {} outside the layout, {} replaced, {} revolutions",
         a.points,
@@ -317,11 +345,7 @@ fn main() -> ! {
     );
     println!(
         "stream: received {} bytes in {} chunks, crc32 {:08x}; {} scans; {} counted regions",
-        done,
-        chunks,
-        digest.finalize(),
-        scans,
-        regions
+        done, chunks, crc32, scans, regions
     );
     let _ = rx.release();
     exit(ok)
