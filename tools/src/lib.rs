@@ -1,6 +1,7 @@
 //! Host-side (std) tools behind the `beamfield` command: everything that runs on a computer
 //! rather than on the microcontroller. The device-side formats and models live in the
 //! `beamfield` crate; this crate reads maps and logs, and writes blobs, reports and pictures.
+pub mod bag;
 pub mod beam_fit;
 pub mod calibrate;
 pub mod heat_map;
