@@ -13,7 +13,7 @@
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, FieldView, EDT_INFINITY};
 use beamfield::{BeamLayout, LikelihoodField, LikelihoodParams, Pose, Scan, SensorMount};
 use beamfield_tools::field_cmd::{build_blob, edt_seeds};
-use beamfield_tools::map::load_map;
+use beamfield_tools::input::map::load_map;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::hint::black_box;
 

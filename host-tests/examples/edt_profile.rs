@@ -7,7 +7,7 @@
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, EDT_INFINITY};
 use beamfield_tools::field_cmd::edt_seeds;
-use beamfield_tools::map::load_map;
+use beamfield_tools::input::map::load_map;
 use std::hint::black_box;
 
 fn main() {

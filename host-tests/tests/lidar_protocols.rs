@@ -8,7 +8,7 @@
 
 use beamfield::lidar::{AssemblerConfig, LidarPoint};
 use beamfield::BeamLayout;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::lidar_cmd::{
     decode_stream, encode_scans, layout, AnyDecoder, Format, LayoutChoice, StreamOptions, MAX_BEAMS,
 };

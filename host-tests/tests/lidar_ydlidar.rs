@@ -22,7 +22,7 @@
 
 use beamfield::lidar::ydlidar::{self, YdlidarDecoder};
 use beamfield::lidar::LidarPoint;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::lidar_cmd::{encode_scans, layout, Format, LayoutChoice, StreamOptions};
 
 fn intel_stream(scans: usize) -> Vec<u8> {

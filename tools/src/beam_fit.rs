@@ -2,8 +2,8 @@
 //! CARMEN log with known poses, `z*` ray cast through a distance-field blob exactly as the
 //! device does it ([`beamfield::RayCaster`]). Also the map helpers the tests and benches share.
 
-use crate::carmen::{CarmenLog, LogError, ReadOptions};
-use crate::map::{Occupancy, OccupancyMap};
+use crate::input::carmen::{CarmenLog, LogError, ReadOptions};
+use crate::input::map::{Occupancy, OccupancyMap};
 use crate::mapping::{build_from_log, GridGeometry, MappingError, MappingOptions, OccupiedCells};
 use beamfield::em::{fit_slices, EmConfig, EmError, EmFit, ShapeUpdate, StopReason};
 use beamfield::field::{BlobError, FieldView};
@@ -113,7 +113,7 @@ pub enum FitError {
     /// Reading the blob file.
     Io(PathBuf, std::io::Error),
     /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
-    Read(crate::limits::ReadError),
+    Read(crate::input::limits::ReadError),
     /// The blob is invalid.
     Blob(PathBuf, BlobError),
     /// The blob cannot be ray cast.
@@ -298,9 +298,9 @@ pub fn amcl_pairs(i: &BeamIntrinsics) -> [(&'static str, f32); 7] {
 /// # Errors
 /// [`FitError`].
 pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
-    let bytes = crate::limits::read_regular_file(
+    let bytes = crate::input::limits::read_regular_file(
         &args.field,
-        crate::limits::MAX_FIELD_FILE_BYTES,
+        crate::input::limits::MAX_FIELD_FILE_BYTES,
         "field file",
     )
     .map_err(FitError::Read)?;

@@ -1,6 +1,6 @@
 //! The `beamfield map from-log` and `beamfield log info` commands.
 
-use crate::carmen::{CarmenLog, LogError, LogStats, MaxRange, ReadOptions};
+use crate::input::carmen::{CarmenLog, LogError, LogStats, MaxRange, ReadOptions};
 use crate::mapping::{
     build_from_log, write_map_server, write_png, MappingOptions, FREE_THRESH, OCCUPIED_THRESH,
 };
@@ -53,7 +53,7 @@ pub struct FromLogArgs {
     pub skip_bad_lines: bool,
     /// Refuse a map of more cells than this (the builder needs about 13 bytes per cell; the
     /// Intel map is 0.78 M cells); at most 268,435,456.
-    #[arg(long = "max-cells", default_value_t = crate::map::DEFAULT_MAX_CELLS,
+    #[arg(long = "max-cells", default_value_t = crate::input::map::DEFAULT_MAX_CELLS,
           value_parser = clap::value_parser!(u64).range(1..=crate::mapping::MAX_CELLS))]
     pub max_cells: u64,
 }
@@ -348,7 +348,7 @@ fn print_info(path: &Path, log: &CarmenLog, s: &LogStats) {
         println!(
             "  … and {} more (use --json for the first {})",
             log.bad_line_count - 20,
-            crate::carmen::MAX_BAD_LINES_KEPT
+            crate::input::carmen::MAX_BAD_LINES_KEPT
         );
     }
 }

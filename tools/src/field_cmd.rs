@@ -1,6 +1,6 @@
 //! `beamfield field …`: build a distance-field blob from a map, query it, render it.
 
-use crate::map::{load_map_limited, MapError, Occupancy, OccupancyMap};
+use crate::input::map::{load_map_limited, MapError, Occupancy, OccupancyMap};
 use beamfield::field::{
     edt_scratch_len, emit_blob_from_squared_cells, emit_blob_tiled_clamped, squared_edt,
     tiled_max_len, tiled_scratch_len, BlobError, EdtError, EdtScratch, FieldHeader, FieldView,
@@ -74,7 +74,7 @@ enum FieldCommand {
         variants: Vec<PathBuf>,
         /// Refuse a map image with more cells than this, checked from the image header before
         /// decoding (the build needs about 10 bytes per cell at its peak).
-        #[arg(long = "max-cells", default_value_t = crate::map::DEFAULT_MAX_CELLS)]
+        #[arg(long = "max-cells", default_value_t = crate::input::map::DEFAULT_MAX_CELLS)]
         max_cells: u64,
     },
     /// Rewrite a blob in another encoding (same header, same codes, so the same scores).
@@ -138,9 +138,9 @@ pub enum FieldCmdError {
     /// A file could not be read or written.
     Io(PathBuf, std::io::Error),
     /// A field file that is not a regular file, or larger than
-    /// [`crate::limits::MAX_FIELD_FILE_BYTES`].
-    Read(crate::limits::ReadError),
-    /// A `field query` input line longer than [`crate::limits::MAX_QUERY_LINE_BYTES`] (its
+    /// [`crate::input::limits::MAX_FIELD_FILE_BYTES`].
+    Read(crate::input::limits::ReadError),
+    /// A `field query` input line longer than [`crate::input::limits::MAX_QUERY_LINE_BYTES`] (its
     /// 1-based number); reading stops there.
     QueryLineTooLong(usize),
     /// `field encode` of a blob with more cells than [`MAX_DECODED_CELLS`] (the file, width,
@@ -188,7 +188,7 @@ impl std::fmt::Display for FieldCmdError {
             Self::QueryLineTooLong(n) => write!(
                 f,
                 "standard input line {n}: longer than {} bytes (stopped reading)",
-                crate::limits::MAX_QUERY_LINE_BYTES
+                crate::input::limits::MAX_QUERY_LINE_BYTES
             ),
             Self::Blob(p, e) => write!(f, "{}: {e}", p.display()),
             Self::Edt(e) => write!(f, "distance transform: {e}"),
@@ -384,10 +384,10 @@ pub fn untile_blob(blob: &[u8]) -> Result<Vec<u8>, BlobError> {
 }
 
 /// Most cells `field encode` decodes a blob to: as many as a raw blob within
-/// [`crate::limits::MAX_FIELD_FILE_BYTES`] holds (134,217,728). A tiled blob stores 16 cells in
+/// [`crate::input::limits::MAX_FIELD_FILE_BYTES`] holds (134,217,728). A tiled blob stores 16 cells in
 /// 2 bytes of tile index, so a tiled file within the limit could announce 8 times more; decoding
 /// and re-encoding costs about 3 bytes per cell.
-pub const MAX_DECODED_CELLS: u64 = crate::limits::MAX_FIELD_FILE_BYTES;
+pub const MAX_DECODED_CELLS: u64 = crate::input::limits::MAX_FIELD_FILE_BYTES;
 
 /// `view` has at most [`MAX_DECODED_CELLS`] cells.
 fn decodable(view: &FieldView<'_>) -> bool {
@@ -507,15 +507,15 @@ pub struct QueryReport {
     pub answered: usize,
     /// Malformed lines reported (not numbers, not UTF-8).
     pub bad: usize,
-    /// The 1-based number of a line longer than [`crate::limits::MAX_QUERY_LINE_BYTES`], where
+    /// The 1-based number of a line longer than [`crate::input::limits::MAX_QUERY_LINE_BYTES`], where
     /// reading stopped (the rest of such a line may never end: `/dev/zero`).
     pub too_long: Option<usize>,
 }
 
 /// Answers "x,y" lines from `input` on `out`; reports malformed lines (1-based line numbers,
-/// the line quoted as an escaped prefix of at most [`crate::limits::QUOTE_CHARS`] characters)
+/// the line quoted as an escaped prefix of at most [`crate::input::limits::QUOTE_CHARS`] characters)
 /// on `err`. Blank lines and lines starting with `#` are ignored. A line longer than
-/// [`crate::limits::MAX_QUERY_LINE_BYTES`] stops the reading ([`QueryReport::too_long`]):
+/// [`crate::input::limits::MAX_QUERY_LINE_BYTES`] stops the reading ([`QueryReport::too_long`]):
 /// nothing of it past the limit is read or kept.
 ///
 /// # Errors
@@ -527,13 +527,15 @@ pub fn run_query(
     mut err: impl Write,
     json: bool,
 ) -> std::io::Result<QueryReport> {
-    use crate::limits::{escaped_prefix, read_bounded_line, BoundedLine, QUOTE_CHARS};
+    use crate::input::limits::{escaped_prefix, read_bounded_line, BoundedLine, QUOTE_CHARS};
     let mut report = QueryReport::default();
     let mut buf = Vec::new();
     let mut number = 0usize;
-    while let Some(line) =
-        read_bounded_line(&mut input, &mut buf, crate::limits::MAX_QUERY_LINE_BYTES)?
-    {
+    while let Some(line) = read_bounded_line(
+        &mut input,
+        &mut buf,
+        crate::input::limits::MAX_QUERY_LINE_BYTES,
+    )? {
         number += 1;
         let t = match line {
             BoundedLine::Text(t) => t.trim(),
@@ -643,13 +645,17 @@ pub fn parse_field_file(bytes: &[u8]) -> Result<FieldView<'_>, BlobError> {
 }
 
 /// Reads a field file (blob and optional free-space section): a regular file of at most
-/// [`crate::limits::MAX_FIELD_FILE_BYTES`].
+/// [`crate::input::limits::MAX_FIELD_FILE_BYTES`].
 ///
 /// # Errors
 /// [`FieldCmdError::Read`].
 pub fn read_field_file(path: &Path) -> Result<Vec<u8>, FieldCmdError> {
-    crate::limits::read_regular_file(path, crate::limits::MAX_FIELD_FILE_BYTES, "field file")
-        .map_err(FieldCmdError::Read)
+    crate::input::limits::read_regular_file(
+        path,
+        crate::input::limits::MAX_FIELD_FILE_BYTES,
+        "field file",
+    )
+    .map_err(FieldCmdError::Read)
 }
 
 /// Runs a `field` subcommand; prints a summary (JSON with `json`).
@@ -896,7 +902,7 @@ pub fn run(args: FieldArgs, json: bool) -> Result<(), FieldCmdError> {
                 |n| n.to_string_lossy().into_owned(),
             );
             let title = format!("distance field of {name}");
-            let fig = crate::field_figure::draw_field(&output, &view, &title)
+            let fig = crate::draw::field_figure::draw_field(&output, &view, &title)
                 .map_err(|e| FieldCmdError::Png(output.clone(), e.to_string()))?;
             if json {
                 println!(

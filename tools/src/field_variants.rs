@@ -4,9 +4,9 @@
 //! ranked by log-likelihood. The per-cell minimum field (`field build --variant`) is what a
 //! localizer carries; this is the question it cannot answer.
 
-use crate::carmen::{CarmenLog, LogError, ReadOptions};
 use crate::field_cmd::{build_blob, FieldCmdError};
-use crate::map::{load_map_limited, OccupancyMap, DEFAULT_MAX_CELLS};
+use crate::input::carmen::{CarmenLog, LogError, ReadOptions};
+use crate::input::map::{load_map_limited, OccupancyMap, DEFAULT_MAX_CELLS};
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams, DEFAULT_MAX_DIST_M};
 use beamfield::{BeamLayout, Pose, Scan, SensorMount};
 use clap::Args;

@@ -3,23 +3,18 @@
 //! `beamfield` crate; this crate reads maps and logs, and writes blobs, reports and pictures.
 pub mod beam_fit;
 pub mod calibrate;
-pub mod heat_map;
-pub mod info;
+pub mod cmd;
+pub mod draw;
+pub mod input;
 pub mod lidar_cmd;
-pub mod limits;
-pub mod overlay;
-pub mod plot;
 pub mod pose_grid;
 pub mod progress;
 pub mod score_cmd;
 pub mod track;
 
 pub mod field_cmd;
-pub mod field_figure;
 pub mod field_variants;
-pub mod map;
 
-pub mod carmen;
 pub mod carmen_cli;
 pub mod demo_assets;
 pub mod mapping;

@@ -2,8 +2,8 @@
 //! back. The frames are written and read by the library's own encoders and decoders
 //! (`beamfield::lidar`), so what these commands produce is what the firmware receives.
 
-use crate::carmen::{CarmenLog, LogError, ReadOptions};
-use crate::plot::{register_fonts, PlotError};
+use crate::draw::plot::{register_fonts, PlotError};
+use crate::input::carmen::{CarmenLog, LogError, ReadOptions};
 use beamfield::lidar::assembler::sample_revolution;
 use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
 use beamfield::lidar::rplidar::{self, RplidarDecoder};
@@ -89,12 +89,12 @@ pub enum LidarCmdError {
     BadOption(String),
     /// The picture could not be drawn.
     Plot(PlotError),
-    /// The capture is longer than [`crate::limits::MAX_CAPTURE_BYTES`].
+    /// The capture is longer than [`crate::input::limits::MAX_CAPTURE_BYTES`].
     CaptureTooLarge(PathBuf),
-    /// The capture holds more than [`crate::limits::MAX_DECODED_SCANS`] scans.
+    /// The capture holds more than [`crate::input::limits::MAX_DECODED_SCANS`] scans.
     TooManyScans,
     /// The stream `lidar encode` would write is longer than
-    /// [`crate::limits::MAX_CAPTURE_BYTES`] (what `lidar decode` reads).
+    /// [`crate::input::limits::MAX_CAPTURE_BYTES`] (what `lidar decode` reads).
     StreamTooLarge,
 }
 
@@ -112,18 +112,18 @@ impl std::fmt::Display for LidarCmdError {
                 f,
                 "{} is larger than {} bytes, the limit for a LiDAR capture",
                 p.display(),
-                crate::limits::MAX_CAPTURE_BYTES
+                crate::input::limits::MAX_CAPTURE_BYTES
             ),
             Self::StreamTooLarge => write!(
                 f,
                 "the stream would be larger than {} bytes, the limit for a LiDAR capture \
                  (encode fewer --scans)",
-                crate::limits::MAX_CAPTURE_BYTES
+                crate::input::limits::MAX_CAPTURE_BYTES
             ),
             Self::TooManyScans => write!(
                 f,
                 "the capture holds more than {} scans, the limit for one decode",
-                crate::limits::MAX_DECODED_SCANS
+                crate::input::limits::MAX_DECODED_SCANS
             ),
         }
     }
@@ -262,7 +262,7 @@ pub fn encode_scans<const N: usize>(
         }
         .map_err(LidarCmdError::Encode)?;
         out.extend_from_slice(&frames[..n]);
-        if out.len() as u64 > crate::limits::MAX_CAPTURE_BYTES {
+        if out.len() as u64 > crate::input::limits::MAX_CAPTURE_BYTES {
             return Err(LidarCmdError::StreamTooLarge);
         }
         if options.format == Format::Ydlidar {
@@ -525,14 +525,19 @@ impl<const N: usize> StreamDecoder<N> {
 ///
 /// # Errors
 /// [`LidarCmdError::Assembler`] for a layout the assembler cannot bin,
-/// [`LidarCmdError::TooManyScans`] past [`crate::limits::MAX_DECODED_SCANS`].
+/// [`LidarCmdError::TooManyScans`] past [`crate::input::limits::MAX_DECODED_SCANS`].
 pub fn decode_stream<const N: usize>(
     format: Format,
     layout: &BeamLayout<N>,
     config: AssemblerConfig,
     bytes: &[u8],
 ) -> Result<Decoded, LidarCmdError> {
-    let mut d = StreamDecoder::new(format, layout, config, crate::limits::MAX_DECODED_SCANS)?;
+    let mut d = StreamDecoder::new(
+        format,
+        layout,
+        config,
+        crate::input::limits::MAX_DECODED_SCANS,
+    )?;
     d.feed(bytes)?;
     d.finish()
 }
@@ -796,8 +801,8 @@ fn run_decode(a: &DecodeArgs, json: bool) -> Result<String, LidarCmdError> {
         a.format,
         &layout,
         config,
-        crate::limits::MAX_CAPTURE_BYTES,
-        crate::limits::MAX_DECODED_SCANS,
+        crate::input::limits::MAX_CAPTURE_BYTES,
+        crate::input::limits::MAX_DECODED_SCANS,
     )?;
     if let Some(path) = &a.output {
         let k = a.scan.unwrap_or(d.scans.len().saturating_sub(1));

@@ -61,7 +61,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Info => {
-            println!("{}", beamfield_tools::info::render(cli.json));
+            println!("{}", beamfield_tools::cmd::info::render(cli.json));
             ExitCode::SUCCESS
         }
         Command::Field(args) => match beamfield_tools::field_cmd::run(args, cli.json) {

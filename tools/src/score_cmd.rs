@@ -5,8 +5,8 @@
 //! laser poses (metres, radians in the map frame).
 
 use crate::calibrate::{calibrate, Calibration};
-use crate::carmen::{CarmenLog, LogError, ReadOptions};
-use crate::plot::{line_chart, LineChart, Series};
+use crate::draw::plot::{line_chart, LineChart, Series};
+use crate::input::carmen::{CarmenLog, LogError, ReadOptions};
 use crate::pose_grid::{argmax, posterior_sd, score_grid, GridSpec};
 use beamfield::field::{LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, Pose, Scan, SensorModel, SensorMount, Tempered};
@@ -125,7 +125,7 @@ pub enum ScoreCmdError {
     /// The blob could not be read.
     Io(PathBuf, std::io::Error),
     /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
-    Read(crate::limits::ReadError),
+    Read(crate::input::limits::ReadError),
     /// The blob is malformed.
     Blob(beamfield::field::BlobError),
     /// The log could not be read.
@@ -163,9 +163,9 @@ struct Loaded {
 }
 
 fn load(m: &ModelArgs) -> Result<Loaded, ScoreCmdError> {
-    let blob = crate::limits::read_regular_file(
+    let blob = crate::input::limits::read_regular_file(
         &m.field,
-        crate::limits::MAX_FIELD_FILE_BYTES,
+        crate::input::limits::MAX_FIELD_FILE_BYTES,
         "field file",
     )
     .map_err(ScoreCmdError::Read)?;
@@ -406,17 +406,22 @@ fn write_overlay(
         dt.to_degrees()
     );
     let scans = vec![
-        crate::overlay::OverlayScan {
+        crate::draw::overlay::OverlayScan {
             name: "endpoints at the given pose".into(),
             color: plotters::style::RGBColor(20, 90, 230),
             pose: at(pose),
-            points: crate::overlay::endpoints(at(pose), &bearings, scan.ranges_m(), max_range),
+            points: crate::draw::overlay::endpoints(
+                at(pose),
+                &bearings,
+                scan.ranges_m(),
+                max_range,
+            ),
         },
-        crate::overlay::OverlayScan {
+        crate::draw::overlay::OverlayScan {
             name: "endpoints at the grid's best pose".into(),
             color: plotters::style::RGBColor(0, 170, 60),
             pose: at(&best.pose),
-            points: crate::overlay::endpoints(
+            points: crate::draw::overlay::endpoints(
                 at(&best.pose),
                 &bearings,
                 scan.ranges_m(),
@@ -425,10 +430,10 @@ fn write_overlay(
         },
     ];
     let view = crate::field_cmd::parse_field_file(&l.blob).map_err(ScoreCmdError::Blob)?;
-    crate::overlay::draw_overlay(
+    crate::draw::overlay::draw_overlay(
         path,
         &view,
-        &crate::overlay::Overlay {
+        &crate::draw::overlay::Overlay {
             title: &title,
             center,
             half_m: a.overlay_half,
@@ -478,7 +483,7 @@ fn write_grid<M: SensorModel<MAX_BEAMS>>(
     let csv_path = name(".csv");
     std::fs::write(&csv_path, csv).map_err(|e| ScoreCmdError::Io(csv_path.clone(), e))?;
     let png_xy = name("-xy.png");
-    crate::heat_map::heat_map(
+    crate::draw::heat_map::heat_map(
         &png_xy,
         &format!(
             "log-likelihood around ({:.2}, {:.2}) m at θ = {:.3} rad",

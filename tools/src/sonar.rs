@@ -95,9 +95,9 @@ pub struct LoadedRing {
 /// # Errors
 /// A message naming the file and the problem.
 pub fn load_ring(path: &Path) -> Result<LoadedRing, String> {
-    let bytes = crate::limits::read_regular_file(
+    let bytes = crate::input::limits::read_regular_file(
         path,
-        crate::limits::MAX_TEXT_FILE_BYTES,
+        crate::input::limits::MAX_TEXT_FILE_BYTES,
         "ring description",
     )
     .map_err(|e| e.to_string())?;

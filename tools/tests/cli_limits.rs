@@ -5,12 +5,12 @@
 
 mod common;
 
-use beamfield_tools::lidar_cmd::{
-    self, encode_scans, Format, LidarCmdError, StreamDecoder, StreamOptions,
-};
-use beamfield_tools::limits::{
+use beamfield_tools::input::limits::{
     MAX_CAPTURE_BYTES, MAX_DECODED_SCANS, MAX_FIELD_FILE_BYTES, MAX_QUERY_LINE_BYTES,
     MAX_TEXT_FILE_BYTES,
+};
+use beamfield_tools::lidar_cmd::{
+    self, encode_scans, Format, LidarCmdError, StreamDecoder, StreamOptions,
 };
 use common::{one_line_error, run_bounded};
 use std::path::{Path, PathBuf};
@@ -234,9 +234,9 @@ fn lidar_decode_reads_a_capped_stream() {
 
 #[test]
 fn lidar_decode_keeps_a_bounded_number_of_scans() {
-    let log = beamfield_tools::carmen::CarmenLog::read_path(
+    let log = beamfield_tools::input::carmen::CarmenLog::read_path(
         Path::new(&intel_log()),
-        beamfield_tools::carmen::ReadOptions::default(),
+        beamfield_tools::input::carmen::ReadOptions::default(),
     )
     .unwrap();
     let layout: beamfield::BeamLayout<{ lidar_cmd::MAX_BEAMS }> = log

@@ -38,7 +38,7 @@ pub use grid::{Cell, GridError, GridGeometry, OccupancyGrid, OccupiedCells};
 pub use raycast::{ray_cast_grid, traverse};
 pub use writer::{pgm_bytes, write_map_server, write_png, yaml_text, MapIoError, MapServerMap};
 
-use crate::carmen::{CarmenLog, Extent, LaserScan};
+use crate::input::carmen::{CarmenLog, Extent, LaserScan};
 use beamfield::Reading;
 use std::ops::ControlFlow;
 
@@ -66,7 +66,7 @@ pub struct MappingOptions {
     pub max_range_free_m: Option<f64>,
     /// Readings at or above this are max-range readings, metres (normally the log's value).
     pub max_range_m: f32,
-    /// Largest grid built, cells (default [`crate::map::DEFAULT_MAX_CELLS`], 2²⁴, what
+    /// Largest grid built, cells (default [`crate::input::map::DEFAULT_MAX_CELLS`], 2²⁴, what
     /// `field build` takes by default; at most [`MAX_CELLS`]). The builder needs about 13 bytes
     /// per cell, and two poses 300 m apart already span 36 M cells at 5 cm.
     pub max_cells: u64,
@@ -84,7 +84,7 @@ impl MappingOptions {
             max_log_odds: 3.5,
             max_range_free_m: Some(8.0),
             max_range_m,
-            max_cells: crate::map::DEFAULT_MAX_CELLS,
+            max_cells: crate::input::map::DEFAULT_MAX_CELLS,
         }
     }
 
@@ -273,7 +273,7 @@ fn beam_segment(scan: &LaserScan, i: usize, options: &MappingOptions) -> Option<
     let z = *scan.ranges_m.get(i)?;
     let n = scan.ranges_m.len();
     let p = scan.pose_f64;
-    let a = p.theta_rad + crate::carmen::carmen_bearing_rad(i, n);
+    let a = p.theta_rad + crate::input::carmen::carmen_bearing_rad(i, n);
     let (s, c) = a.sin_cos();
     let start = (p.x_m, p.y_m);
     let (length, hit) = match Reading::classify(z, options.max_range_m) {
@@ -455,7 +455,7 @@ pub fn endpoint_agreement(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::carmen::MaxRange;
+    use crate::input::carmen::MaxRange;
     use beamfield::Pose;
 
     const NO_RETURN: f32 = 40.0;

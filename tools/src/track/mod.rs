@@ -16,7 +16,7 @@
 //!
 //! The FLASER pose is the laser's pose, so the filter estimates laser poses (centred mount).
 
-use crate::carmen::LogError;
+use crate::input::carmen::LogError;
 use beamfield::field::{BlobError, FreeSpaceError};
 use beamfield::mcl::MclError;
 use clap::{Args, ValueEnum};
@@ -150,7 +150,7 @@ pub enum TrackError {
     /// A file could not be read or written.
     Io(PathBuf, std::io::Error),
     /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
-    Read(crate::limits::ReadError),
+    Read(crate::input::limits::ReadError),
     /// The distance-field blob is malformed.
     Blob(BlobError),
     /// The free-space section after the blob is malformed.
@@ -186,7 +186,6 @@ fn usage(m: impl Into<String>) -> TrackError {
     TrackError::Usage(m.into())
 }
 
-mod draw;
 mod run;
 
 pub use run::{load, run_once, synthesize_odometry, Metrics, RunOptions, RunResult, TrackInput};
@@ -286,7 +285,7 @@ pub fn run(args: &TrackArgs, json: bool) -> Result<String, TrackError> {
         let r = run_once(&input, &o)?;
         if runs.is_empty() {
             if let Some(path) = &args.output {
-                draw::draw_track(path, &input, &r, o.scans)?;
+                crate::draw::tracks::draw_track(path, &input, &r, o.scans)?;
             }
         }
         runs.push((seed, r.metrics(from), r));

@@ -1,6 +1,6 @@
 //! One run of the localizer over a loaded log, and its metrics.
 
-use crate::carmen::{CarmenLog, ReadOptions};
+use crate::input::carmen::{CarmenLog, ReadOptions};
 use crate::score_cmd::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::gaussian::standard_normal_pair;
@@ -61,9 +61,12 @@ pub fn load(
     z_rand: f32,
     sigma_hit: f32,
 ) -> Result<TrackInput, TrackError> {
-    let bytes =
-        crate::limits::read_regular_file(field, crate::limits::MAX_FIELD_FILE_BYTES, "field file")
-            .map_err(TrackError::Read)?;
+    let bytes = crate::input::limits::read_regular_file(
+        field,
+        crate::input::limits::MAX_FIELD_FILE_BYTES,
+        "field file",
+    )
+    .map_err(TrackError::Read)?;
     let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
     let max_range = log
         .max_range

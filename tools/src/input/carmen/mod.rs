@@ -270,7 +270,7 @@ impl CarmenLog {
     /// line (unless [`ReadOptions::skip_bad_lines`]), [`LogError::BadOption`] for a given max
     /// range that is not finite and positive.
     ///
-    /// At most [`crate::limits::MAX_LOG_BYTES`] are read: a longer file (or a FIFO or device
+    /// At most [`crate::input::limits::MAX_LOG_BYTES`] are read: a longer file (or a FIFO or device
     /// that does not end, such as `/dev/zero`) is [`LogError::TooLarge`], whatever its lines.
     pub fn read_path(path: &Path, options: ReadOptions) -> Result<Self, LogError> {
         use std::io::Read;
@@ -278,8 +278,9 @@ impl CarmenLog {
             path: Some(path.to_path_buf()),
             source,
         })?;
-        let mut reader =
-            std::io::BufReader::new(file.take(crate::limits::MAX_LOG_BYTES.saturating_add(1)));
+        let mut reader = std::io::BufReader::new(
+            file.take(crate::input::limits::MAX_LOG_BYTES.saturating_add(1)),
+        );
         let read = Self::read(&mut reader, options);
         // More than the limit was there: the file is too large, whatever a cut line says.
         if reader.get_ref().limit() == 0 {

@@ -1,0 +1,4 @@
+//! The `beamfield` subcommands, one module per subcommand as the user types it. Each parses its
+//! arguments, runs the library and returns one report that is both `Serialize` (`--json`) and
+//! `Display` (text); `main` prints it.
+pub mod info;
