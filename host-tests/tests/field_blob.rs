@@ -2,7 +2,8 @@
 //! and `field query` against an exact transform on the TurtleBot3 and Willow maps.
 
 use beamfield::field::{emit_blob, BlobError, FieldHeader, FieldView, BLOB_HEADER_LEN};
-use beamfield_tools::field_cmd::{build_blob, run_query};
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::cmd::field::query::run_query;
 use beamfield_tools::input::map::{load_map, Occupancy};
 use host_tests::field_reference::{expected_distance, Grid};
 use proptest::prelude::*;

@@ -27,7 +27,7 @@
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams, PreparedScan};
 use beamfield::{math, BeamLayout, Pose, Scan, SensorMount, Stride};
-use beamfield_tools::field_cmd::build_blob;
+use beamfield_tools::blob::build_blob;
 use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::input::map::load_map;
 

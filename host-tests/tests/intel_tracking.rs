@@ -15,7 +15,7 @@
 
 use beamfield::field::LikelihoodParams;
 use beamfield::{Pose, SensorMount};
-use beamfield_tools::field_cmd::{build_blob, build_free_space};
+use beamfield_tools::blob::{build_blob, build_free_space};
 use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::input::map::OccupancyMap;
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};

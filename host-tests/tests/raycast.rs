@@ -14,7 +14,7 @@
 use beamfield::field::{FieldView, DEFAULT_MAX_DIST_M};
 use beamfield::RayCaster;
 use beamfield_tools::beam_fit::map_from_log;
-use beamfield_tools::field_cmd::build_blob;
+use beamfield_tools::blob::build_blob;
 use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::input::map::{load_map, OccupancyMap};
 use beamfield_tools::mapping::ray_cast_grid;

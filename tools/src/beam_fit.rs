@@ -304,7 +304,7 @@ pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
         "field file",
     )
     .map_err(FitError::Read)?;
-    let view = crate::field_cmd::parse_field_file(&bytes)
+    let view = crate::input::field_file::parse_field_file(&bytes)
         .map_err(|e| FitError::Blob(args.field.clone(), e))?;
     let t_read = Instant::now();
     let log = CarmenLog::read_path(

@@ -9,11 +9,9 @@ pub mod input;
 pub mod lidar_cmd;
 pub mod pose_grid;
 pub mod progress;
-pub mod score_cmd;
 pub mod track;
 
-pub mod field_cmd;
-pub mod field_variants;
+pub mod blob;
 
 pub mod carmen_cli;
 pub mod demo_assets;

@@ -1,6 +1,8 @@
 //! `beamfield`: the host command-line tool. Run `beamfield --help`.
 
 use clap::{Parser, Subcommand};
+use serde::Serialize;
+use std::fmt::Display;
 use std::process::ExitCode;
 
 /// Host tools for beamfield: build distance-field blobs from maps, read logs, score scans,
@@ -23,13 +25,13 @@ enum Command {
     Info,
     /// Distance-field blobs for the likelihood field: build one from a ROS map, query it,
     /// render it as a picture.
-    Field(beamfield_tools::field_cmd::FieldArgs),
+    Field(beamfield_tools::cmd::field::FieldArgs),
     /// Log-likelihood of one scan of a CARMEN log at a pose (likelihood field over a blob),
     /// optionally a score surface around it (--grid: CSV and PNG).
-    Score(beamfield_tools::score_cmd::ScoreArgs),
+    Score(beamfield_tools::cmd::score::ScoreArgs),
     /// The smallest tempering κ whose credible sets over a local pose grid hold the logged
     /// poses at the requested rate; coverage at κ = 1 and at κ, and a coverage-vs-κ PNG.
-    Calibrate(beamfield_tools::score_cmd::CalibrateArgs),
+    Calibrate(beamfield_tools::cmd::calibrate::CalibrateArgs),
     /// Monte Carlo localization over a whole CARMEN log against its logged poses (odometry
     /// synthesized from them with the motion model's noise): tracking error, global
     /// localization, kidnapping; a PNG of the tracks over the map.
@@ -64,20 +66,22 @@ fn main() -> ExitCode {
             println!("{}", beamfield_tools::cmd::info::render(cli.json));
             ExitCode::SUCCESS
         }
-        Command::Field(args) => match beamfield_tools::field_cmd::run(args, cli.json) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("beamfield field: {e}");
-                ExitCode::FAILURE
+        Command::Field(args) => {
+            let r = beamfield_tools::cmd::field::run(args, cli.json);
+            match &r {
+                Ok(report) if report.streamed() => ExitCode::SUCCESS,
+                _ => finish("beamfield field", r, cli.json),
             }
-        },
-        Command::Score(args) => print_or_fail(
-            "score",
-            beamfield_tools::score_cmd::run_score(&args, cli.json),
+        }
+        Command::Score(args) => finish(
+            "beamfield score",
+            beamfield_tools::cmd::score::run(&args),
+            cli.json,
         ),
-        Command::Calibrate(args) => print_or_fail(
-            "calibrate",
-            beamfield_tools::score_cmd::run_calibrate(&args, cli.json),
+        Command::Calibrate(args) => finish(
+            "beamfield calibrate",
+            beamfield_tools::cmd::calibrate::run(&args),
+            cli.json,
         ),
         Command::Track(args) => match beamfield_tools::track::run(&args, cli.json) {
             Ok(out) => {
@@ -124,17 +128,31 @@ fn main() -> ExitCode {
     }
 }
 
-fn print_or_fail(
-    name: &str,
-    r: Result<String, beamfield_tools::score_cmd::ScoreCmdError>,
+/// Prints a command's report once, as JSON (`--json`: keys in sorted order, as every report
+/// has always printed them) or as text, and returns success; or prints the error on stderr
+/// after `prefix` and returns failure.
+fn finish<R: Serialize + Display, E: Display>(
+    prefix: &str,
+    r: Result<R, E>,
+    json: bool,
 ) -> ExitCode {
     match r {
-        Ok(out) => {
-            println!("{out}");
+        Ok(report) => {
+            if json {
+                match serde_json::to_value(&report) {
+                    Ok(v) => println!("{v}"),
+                    Err(e) => {
+                        eprintln!("{prefix}: the report cannot be written as JSON: {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            } else {
+                println!("{report}");
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("beamfield {name}: {e}");
+            eprintln!("{prefix}: {e}");
             ExitCode::FAILURE
         }
     }

@@ -477,7 +477,7 @@ fn score_variants_takes_at_most_16_variants() {
 #[test]
 fn field_encode_decodes_at_most_as_many_cells_as_a_raw_file_holds() {
     use beamfield::field::{emit_blob_tiled, tiled_max_len, tiled_scratch_len, FieldHeader};
-    use beamfield_tools::field_cmd::MAX_DECODED_CELLS;
+    use beamfield_tools::blob::MAX_DECODED_CELLS;
     let d = scratch("encode-cells");
     // 12,000 × 12,000 = 144 M cells in an 18 MB tiled file (2 bytes of index per 16 cells):
     // decoded, more than a raw blob within the file limit holds.

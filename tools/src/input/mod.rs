@@ -1,5 +1,6 @@
 //! Input readers: the CARMEN log reader, the ROS map_server map reader, and the bounded file and
 //! line readers every command reads its inputs through (docs/resource-limits.md).
 pub mod carmen;
+pub mod field_file;
 pub mod limits;
 pub mod map;

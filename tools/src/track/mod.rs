@@ -84,7 +84,7 @@ pub struct TrackArgs {
     /// Score every S-th beam (1 to 1081, the most beams a scan has here).
     #[arg(long, default_value_t = 1,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new()
-              .range(1..=crate::score_cmd::MAX_BEAMS as u64))]
+              .range(1..=crate::cmd::scored_log::MAX_BEAMS as u64))]
     pub stride: usize,
     /// Odometry noise odom_alpha1..4 (variance coefficients, AMCL's convention), used both to
     /// synthesize the odometry and in the filter: "A" or "A1,A2,A3,A4".

@@ -1,7 +1,7 @@
 //! One run of the localizer over a loaded log, and its metrics.
 
+use crate::cmd::scored_log::MAX_BEAMS;
 use crate::input::carmen::{CarmenLog, ReadOptions};
-use crate::score_cmd::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::gaussian::standard_normal_pair;
 use beamfield::mcl::{
