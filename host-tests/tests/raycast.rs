@@ -108,7 +108,7 @@ fn intel_within_a_hundredth_of_a_cell() {
 #[test]
 fn intel_scan_scores_and_fit() {
     use beamfield::{BeamFieldModel, BeamIntrinsics, BeamModel, Pose, SensorModel};
-    use beamfield_tools::beam_fit::{fit_log, FitArgs, LambdaUpdate};
+    use beamfield_tools::beam_fit::{fit_log, FitOptions, LambdaUpdate};
     let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
     let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
     let max = log.max_range.value_m().unwrap();
@@ -150,9 +150,7 @@ fn intel_scan_scores_and_fit() {
             want.log_likelihood
         );
     }
-    let args = FitArgs {
-        field: "unused".into(),
-        log: path,
+    let args = FitOptions {
         iterations: 24,
         lambda: LambdaUpdate::Truncated,
         scans: Some((0, 200)),

@@ -35,12 +35,12 @@ enum Command {
     /// Monte Carlo localization over a whole CARMEN log against its logged poses (odometry
     /// synthesized from them with the motion model's noise): tracking error, global
     /// localization, kidnapping; a PNG of the tracks over the map.
-    Track(beamfield_tools::track::TrackArgs),
+    Track(beamfield_tools::cmd::track::TrackArgs),
     /// Fit the beam model's intrinsics (EM) to a CARMEN log, z* ray cast through a blob.
-    Fit(beamfield_tools::beam_fit::FitArgs),
+    Fit(beamfield_tools::cmd::fit::FitArgs),
     /// Ultrasonic ring tools (firing schedules and crosstalk).
     #[command(subcommand)]
-    Sonar(beamfield_tools::sonar::SonarCommand),
+    Sonar(beamfield_tools::cmd::sonar::SonarCommand),
     /// Build maps: `map from-log` turns a CARMEN laser log with known poses into a ROS
     /// map_server map (YAML + PGM).
     Map {
@@ -83,36 +83,21 @@ fn main() -> ExitCode {
             beamfield_tools::cmd::calibrate::run(&args),
             cli.json,
         ),
-        Command::Track(args) => match beamfield_tools::track::run(&args, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield track: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Command::Fit(args) => match beamfield_tools::beam_fit::run(&args, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield fit: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Command::Sonar(cmd) => match beamfield_tools::sonar::run(&cmd, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield sonar: {e}");
-                ExitCode::FAILURE
-            }
-        },
+        Command::Track(args) => finish(
+            "beamfield track",
+            beamfield_tools::cmd::track::run(&args),
+            cli.json,
+        ),
+        Command::Fit(args) => finish(
+            "beamfield fit",
+            beamfield_tools::cmd::fit::run(&args),
+            cli.json,
+        ),
+        Command::Sonar(cmd) => finish(
+            "beamfield sonar",
+            beamfield_tools::cmd::sonar::run(&cmd),
+            cli.json,
+        ),
         Command::Map { command } => beamfield_tools::carmen_cli::run_map(command, cli.json),
         Command::Log { command } => beamfield_tools::carmen_cli::run_log(command, cli.json),
         Command::Lidar(cmd) => match beamfield_tools::lidar_cmd::run(&cmd, cli.json) {

@@ -3,7 +3,10 @@
 //! `Display` (text); `main` prints it.
 pub mod calibrate;
 pub mod field;
+pub mod fit;
 pub mod info;
 pub mod likelihood;
 pub mod score;
 pub mod scored_log;
+pub mod sonar;
+pub mod track;
