@@ -13,7 +13,6 @@ pub mod track;
 
 pub mod blob;
 
-pub mod carmen_cli;
 pub mod demo_assets;
 pub mod mapping;
 pub mod sonar;

@@ -45,13 +45,13 @@ enum Command {
     /// map_server map (YAML + PGM).
     Map {
         #[command(subcommand)]
-        command: beamfield_tools::carmen_cli::MapCommand,
+        command: beamfield_tools::cmd::map::MapCommand,
     },
     /// Inspect laser logs: `log info` summarizes a CARMEN log (scans, beams, max-range value,
     /// pose extent, malformed lines).
     Log {
         #[command(subcommand)]
-        command: beamfield_tools::carmen_cli::LogCommand,
+        command: beamfield_tools::cmd::log::LogCommand,
     },
     /// LiDAR byte streams: `lidar encode` writes a CARMEN log's scans as an LD06, RPLIDAR or
     /// XV-11 stream; `lidar decode` decodes a stream into scans and counters.
@@ -98,8 +98,16 @@ fn main() -> ExitCode {
             beamfield_tools::cmd::sonar::run(&cmd),
             cli.json,
         ),
-        Command::Map { command } => beamfield_tools::carmen_cli::run_map(command, cli.json),
-        Command::Log { command } => beamfield_tools::carmen_cli::run_log(command, cli.json),
+        Command::Map { command } => finish(
+            "error",
+            beamfield_tools::cmd::map::run_map(&command),
+            cli.json,
+        ),
+        Command::Log { command } => finish(
+            "error",
+            beamfield_tools::cmd::log::run_log(&command),
+            cli.json,
+        ),
         Command::Lidar(cmd) => match beamfield_tools::lidar_cmd::run(&cmd, cli.json) {
             Ok(out) => {
                 println!("{out}");

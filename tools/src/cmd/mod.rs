@@ -6,6 +6,8 @@ pub mod field;
 pub mod fit;
 pub mod info;
 pub mod likelihood;
+pub mod log;
+pub mod map;
 pub mod score;
 pub mod scored_log;
 pub mod sonar;
