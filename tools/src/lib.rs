@@ -6,7 +6,7 @@ pub mod calibrate;
 pub mod cmd;
 pub mod draw;
 pub mod input;
-pub mod lidar_cmd;
+pub mod lidar_stream;
 pub mod pose_grid;
 pub mod progress;
 pub mod track;

@@ -56,16 +56,17 @@ enum Command {
     /// LiDAR byte streams: `lidar encode` writes a CARMEN log's scans as an LD06, RPLIDAR or
     /// XV-11 stream; `lidar decode` decodes a stream into scans and counters.
     #[command(subcommand)]
-    Lidar(beamfield_tools::lidar_cmd::LidarCommand),
+    Lidar(beamfield_tools::cmd::lidar::LidarCommand),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Info => {
-            println!("{}", beamfield_tools::cmd::info::render(cli.json));
-            ExitCode::SUCCESS
-        }
+        Command::Info => finish(
+            "beamfield info",
+            Ok::<_, std::convert::Infallible>(beamfield_tools::cmd::info::run()),
+            cli.json,
+        ),
         Command::Field(args) => {
             let r = beamfield_tools::cmd::field::run(args, cli.json);
             match &r {
@@ -108,16 +109,11 @@ fn main() -> ExitCode {
             beamfield_tools::cmd::log::run_log(&command),
             cli.json,
         ),
-        Command::Lidar(cmd) => match beamfield_tools::lidar_cmd::run(&cmd, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield lidar: {e}");
-                ExitCode::FAILURE
-            }
-        },
+        Command::Lidar(cmd) => finish(
+            "beamfield lidar",
+            beamfield_tools::cmd::lidar::run(&cmd),
+            cli.json,
+        ),
     }
 }
 

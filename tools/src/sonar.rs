@@ -274,7 +274,7 @@ impl std::fmt::Display for ScheduleReport {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::input::ring::load_ring;
+    use crate::input::ring::{load_ring, ring_from_spec, RingSpec};
     use std::path::Path;
 
     fn ring24() -> LoadedRing {

@@ -5,6 +5,7 @@ pub mod calibrate;
 pub mod field;
 pub mod fit;
 pub mod info;
+pub mod lidar;
 pub mod likelihood;
 pub mod log;
 pub mod map;

@@ -4,4 +4,5 @@ pub mod field_figure;
 pub mod heat_map;
 pub mod overlay;
 pub mod plot;
+pub mod polar;
 pub mod tracks;
