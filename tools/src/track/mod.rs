@@ -108,6 +108,10 @@ pub fn usage(m: impl Into<String>) -> TrackError {
     TrackError::Usage(m.into())
 }
 
+mod input;
+mod odometry;
 mod run;
 
-pub use run::{load, run_once, synthesize_odometry, Metrics, RunOptions, RunResult, TrackInput};
+pub use input::{load, TrackInput};
+pub use odometry::{odometry_sample, synthesize_odometry};
+pub use run::{run_once, Metrics, RunOptions, RunResult};
