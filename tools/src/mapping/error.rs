@@ -9,7 +9,7 @@ pub enum MappingError {
     /// An option is out of range (resolution or margin ≤ 0 or not finite, increments of the
     /// wrong sign, clamps not around 0, max range not positive).
     BadOptions,
-    /// The extent at this resolution needs more than [`MappingOptions::max_cells`] cells.
+    /// The extent at this resolution needs more than [`MappingOptions::max_cells`](super::MappingOptions::max_cells) cells.
     TooLarge {
         /// Cells along x.
         width: u64,
@@ -47,7 +47,7 @@ pub(super) fn f64_spacing(m: f64) -> f64 {
     next - m
 }
 
-/// Largest [`MappingOptions::max_cells`] (2²⁸ cells, 1 GiB of log-odds, 3.2 GiB in all).
+/// Largest [`MappingOptions::max_cells`](super::MappingOptions::max_cells) (2²⁸ cells, 1 GiB of log-odds, 3.2 GiB in all).
 pub const MAX_CELLS: u64 = 1 << 28;
 
 impl std::fmt::Display for MappingError {

@@ -16,7 +16,7 @@ pub struct TrackInput {
     pub params: LikelihoodParams,
     /// The log's beam layout (centred mount).
     pub layout: BeamLayout<MAX_BEAMS>,
-    /// The scans' ranges (each made a [`Scan`] when it is scored: a `Scan<MAX_BEAMS>` holds
+    /// The scans' ranges (each made a [`Scan`](beamfield::Scan) when it is scored: a `Scan<MAX_BEAMS>` holds
     /// 4.3 KB whatever its beams, so a log of many short scans is not multiplied in memory).
     pub scans: Vec<Vec<f32>>,
     /// The logged (corrected) laser poses: the truth.

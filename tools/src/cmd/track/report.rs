@@ -86,10 +86,10 @@ impl fmt::Display for TrackReport {
             self.lost_after_convergence_runs,
             self.runs.len(),
         );
-        write!(
+        writeln!(
             f,
             "{} scans, {} particles, κ {}, stride {}, odom_alpha {:?}, init {:?}, weighting {:?}, \
-             recovery {:?}{}{}{}\n",
+             recovery {:?}{}{}{}",
             o.scans,
             o.particles,
             o.kappa,
