@@ -61,8 +61,8 @@ pub fn max_range_json(m: &MaxRange) -> serde_json::Value {
 /// Runs a `log` subcommand.
 ///
 /// # Errors
-/// The message of the [`LogError`].
-pub fn run_log(command: &LogCommand) -> Result<LogInfoReport, String> {
+/// The [`LogError`].
+pub fn run_log(command: &LogCommand) -> Result<LogInfoReport, LogError> {
     match command {
         LogCommand::Info(args) => run(args),
     }
@@ -71,16 +71,15 @@ pub fn run_log(command: &LogCommand) -> Result<LogInfoReport, String> {
 /// Runs `beamfield log info`.
 ///
 /// # Errors
-/// The message of the [`LogError`].
-pub fn run(args: &LogInfoArgs) -> Result<LogInfoReport, String> {
+/// The [`LogError`].
+pub fn run(args: &LogInfoArgs) -> Result<LogInfoReport, LogError> {
     let log = read_log(
         &args.log,
         ReadOptions {
             max_range_m: args.max_range,
             skip_bad_lines: true,
         },
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     Ok(LogInfoReport {
         path: args.log.clone(),
         stats: log.stats(),

@@ -2,10 +2,11 @@
 //! CARMEN laser log with known poses ([`crate::mapping`]).
 
 use super::log::{max_range_json, read_log};
-use crate::input::carmen::{MaxRange, ReadOptions};
+use crate::draw::map_picture::write_png;
+use crate::input::carmen::{LogError, MaxRange, ReadOptions};
 use crate::mapping::{
-    build_from_log, write_map_server, write_png, MappingOptions, MappingStats, FREE_THRESH,
-    OCCUPIED_THRESH,
+    build_from_log, write_map_server, MapIoError, MappingError, MappingOptions, MappingStats,
+    FREE_THRESH, OCCUPIED_THRESH,
 };
 use crate::progress::Progress;
 use clap::{Args, Subcommand};
@@ -62,15 +63,42 @@ pub struct FromLogArgs {
     pub max_cells: u64,
 }
 
-fn fail(message: impl fmt::Display) -> String {
-    message.to_string()
+/// Why `map from-log` failed.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum FromLogError {
+    /// A bad option, or a log without a max-range value or scans (the message says which).
+    Usage(String),
+    /// The log could not be read.
+    Log(LogError),
+    /// The map could not be built.
+    Mapping(MappingError),
+    /// The map or its picture could not be written.
+    Write(MapIoError),
+}
+
+impl fmt::Display for FromLogError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Usage(m) => f.write_str(m),
+            Self::Log(e) => write!(f, "{e}"),
+            Self::Mapping(e) => write!(f, "{e}"),
+            Self::Write(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+impl std::error::Error for FromLogError {}
+
+fn fail(message: impl Into<String>) -> FromLogError {
+    FromLogError::Usage(message.into())
 }
 
 /// Runs a `map` subcommand.
 ///
 /// # Errors
-/// A message.
-pub fn run_map(command: &MapCommand) -> Result<FromLogReport, String> {
+/// [`FromLogError`].
+pub fn run_map(command: &MapCommand) -> Result<FromLogReport, FromLogError> {
     match command {
         MapCommand::FromLog(args) => run(args),
     }
@@ -79,8 +107,9 @@ pub fn run_map(command: &MapCommand) -> Result<FromLogReport, String> {
 /// Runs `beamfield map from-log`; skipped lines and progress go to stderr.
 ///
 /// # Errors
-/// A message: bad options, an unreadable log, no max-range value, no scan, a failed write.
-pub fn run(args: &FromLogArgs) -> Result<FromLogReport, String> {
+/// [`FromLogError`]: bad options, an unreadable log, no max-range value, no scan, a failed
+/// write.
+pub fn run(args: &FromLogArgs) -> Result<FromLogReport, FromLogError> {
     if !(args.resolution.is_finite() && args.resolution > 0.0) {
         return Err(fail("--resolution must be a finite number of metres > 0"));
     }
@@ -100,7 +129,7 @@ pub fn run(args: &FromLogArgs) -> Result<FromLogReport, String> {
         },
     ) {
         Ok(log) => log,
-        Err(e) => return Err(fail(e)),
+        Err(e) => return Err(FromLogError::Log(e)),
     };
     for bad in &log.bad_lines {
         eprintln!("skipped {bad}");
@@ -135,12 +164,12 @@ pub fn run(args: &FromLogArgs) -> Result<FromLogReport, String> {
     });
     let (log_odds, stats) = match built {
         Ok(b) => b,
-        Err(e) => return Err(fail(e)),
+        Err(e) => return Err(FromLogError::Mapping(e)),
     };
     let grid = log_odds.to_occupancy(OCCUPIED_THRESH, FREE_THRESH);
     let written = match write_map_server(&grid, &args.output) {
         Ok(w) => w,
-        Err(e) => return Err(fail(e)),
+        Err(e) => return Err(FromLogError::Write(e)),
     };
     if let Some(png) = &args.png {
         let trajectory: Vec<(f64, f64)> = log
@@ -149,7 +178,7 @@ pub fn run(args: &FromLogArgs) -> Result<FromLogReport, String> {
             .map(|s| (s.pose_f64.x_m, s.pose_f64.y_m))
             .collect();
         if let Err(e) = write_png(&grid, &trajectory, png) {
-            return Err(fail(e));
+            return Err(FromLogError::Write(e));
         }
     }
     let g = grid.geometry();

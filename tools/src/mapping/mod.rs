@@ -40,7 +40,7 @@ pub use error::{MappingError, MAX_CELLS, MAX_COORDINATE_ULP_CELLS};
 
 pub use grid::{Cell, GridError, GridGeometry, OccupancyGrid, OccupiedCells};
 pub use raycast::{ray_cast_grid, traverse};
-pub use writer::{pgm_bytes, write_map_server, write_png, yaml_text, MapIoError, MapServerMap};
+pub use writer::{pgm_bytes, write_map_server, yaml_text, MapIoError, MapServerMap};
 
 use crate::input::carmen::{CarmenLog, Extent, LaserScan};
 use beamfield::Reading;
