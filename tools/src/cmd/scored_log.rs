@@ -138,20 +138,18 @@ pub fn scan_of(log: &CarmenLog, i: usize) -> Result<(Scan<MAX_BEAMS>, Pose), Sco
     Ok((scan, s.pose))
 }
 
-/// Parses a pose "X,Y,THETA" (`--pose`).
+/// Parses a pose "X,Y,THETA" (`--pose` of `score` and `field score-variants`).
 ///
 /// # Errors
-/// [`ScoreCmdError::Usage`].
-pub fn parse_pose(text: &str) -> Result<Pose, ScoreCmdError> {
+/// The message for a [`ScoreCmdError::Usage`] (or its `score-variants` twin).
+pub fn parse_pose(text: &str) -> Result<Pose, String> {
     let v: Vec<f32> = text
         .split(',')
         .map(|t| t.trim().parse::<f32>())
         .collect::<Result<_, _>>()
-        .map_err(|_| usage(format!("--pose {text:?}: expected X,Y,THETA (numbers)")))?;
+        .map_err(|_| format!("--pose {text:?}: expected X,Y,THETA (numbers)"))?;
     match v.as_slice() {
         [x, y, t] if v.iter().all(|a| a.is_finite()) => Ok(Pose::new(*x, *y, *t)),
-        _ => Err(usage(format!(
-            "--pose {text:?}: expected three finite numbers"
-        ))),
+        _ => Err(format!("--pose {text:?}: expected three finite numbers")),
     }
 }

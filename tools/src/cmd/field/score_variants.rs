@@ -4,6 +4,7 @@
 use crate::blob::variants::{score_variants, VariantVerdict, MAX_SCORE_VARIANTS};
 use crate::blob::FieldError;
 use crate::cmd::likelihood::LikelihoodArgs;
+use crate::cmd::scored_log::parse_pose;
 use crate::input::carmen::{CarmenLog, ReadOptions};
 use crate::input::map::{load_map_limited, DEFAULT_MAX_CELLS};
 use beamfield::field::DEFAULT_MAX_DIST_M;
@@ -56,20 +57,6 @@ pub struct ScoreVariantsArgs {
 
 fn usage(m: impl Into<String>) -> ScoreVariantsError {
     ScoreVariantsError::Usage(m.into())
-}
-
-fn parse_pose(text: &str) -> Result<Pose, ScoreVariantsError> {
-    let v: Vec<f32> = text
-        .split(',')
-        .map(|t| t.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| usage(format!("--pose {text:?}: expected X,Y,THETA (numbers)")))?;
-    match v.as_slice() {
-        [x, y, t] if v.iter().all(|a| a.is_finite()) => Ok(Pose::new(*x, *y, *t)),
-        _ => Err(usage(format!(
-            "--pose {text:?}: expected three finite numbers"
-        ))),
-    }
 }
 
 fn name_of(p: &Path) -> String {
@@ -132,7 +119,7 @@ pub fn run(a: &ScoreVariantsArgs) -> Result<ScoreVariantsReport, ScoreVariantsEr
         .to_scan()
         .map_err(|e| usage(format!("scan {} (line {}): {e}", a.scan, s.line)))?;
     let pose = match &a.pose {
-        Some(t) => parse_pose(t)?,
+        Some(t) => parse_pose(t).map_err(usage)?,
         None => s.pose,
     };
     crate::progress::note(&format!(

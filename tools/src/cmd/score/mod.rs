@@ -114,7 +114,7 @@ pub fn run(a: &ScoreArgs) -> Result<ScoreReport, ScoreCmdError> {
     let model = Tempered::new(lf, a.kappa, 1).map_err(|e| usage(format!("--kappa: {e}")))?;
     let (scan, logged) = scan_of(&l.log, a.scan)?;
     let pose = match &a.pose {
-        Some(t) => parse_pose(t)?,
+        Some(t) => parse_pose(t).map_err(usage)?,
         None => logged,
     };
     let s = model.score(&l.layout, &scan, &pose);
