@@ -7,7 +7,7 @@
 
 #![no_main]
 
-use beamfield_tools::carmen::{CarmenLog, LogError, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, LogError, ReadOptions};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -13,7 +13,7 @@
 
 #![no_main]
 
-use beamfield_tools::map::load_map_limited;
+use beamfield_tools::input::map::load_map_limited;
 use libfuzzer_sys::fuzz_target;
 use std::path::PathBuf;
 use std::sync::OnceLock;

@@ -12,8 +12,8 @@
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, FieldView, EDT_INFINITY};
 use beamfield::{BeamLayout, LikelihoodField, LikelihoodParams, Pose, Scan, SensorMount};
-use beamfield_tools::field_cmd::{build_blob, edt_seeds};
-use beamfield_tools::map::load_map;
+use beamfield_tools::blob::{build_blob, edt_seeds};
+use beamfield_tools::input::map::load_map;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::hint::black_box;
 
@@ -223,7 +223,7 @@ fn transform(c: &mut Criterion) {
 /// (the same, then deduplicated 4 × 4 tiles): the ratio to report is tiled over raw.
 /// `-- blob_build` runs these alone.
 fn blob_build(c: &mut Criterion) {
-    use beamfield_tools::field_cmd::{build_blob_encoded, Encoding};
+    use beamfield_tools::blob::{build_blob_encoded, Encoding};
     let map = load_map(&host_tests::data_dir().join("map_willow_garage/willow-full-0.05.yaml"))
         .expect("Willow map");
     let mut g = c.benchmark_group("blob_build");

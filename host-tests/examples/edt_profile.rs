@@ -6,8 +6,8 @@
 //! the same with a third argument `skip` counts everything but the transform.
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, EDT_INFINITY};
-use beamfield_tools::field_cmd::edt_seeds;
-use beamfield_tools::map::load_map;
+use beamfield_tools::blob::edt_seeds;
+use beamfield_tools::input::map::load_map;
 use std::hint::black_box;
 
 fn main() {

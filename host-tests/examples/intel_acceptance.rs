@@ -12,7 +12,7 @@
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, SensorMount};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::pose_grid::GridSpec;
 use std::path::PathBuf;
 

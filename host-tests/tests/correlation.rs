@@ -6,9 +6,9 @@
 use beamfield::correlation::{MapCorrelation, CORRELATION_EPSILON};
 use beamfield::field::{emit_blob, FieldHeader, FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, Pose, Scan, SensorModel, SensorMount};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::{Occupancy, OccupancyMap};
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::map::{Occupancy, OccupancyMap};
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 
 use beamfield::mcl::XorShift64 as Rng;

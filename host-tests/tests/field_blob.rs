@@ -2,8 +2,9 @@
 //! and `field query` against an exact transform on the TurtleBot3 and Willow maps.
 
 use beamfield::field::{emit_blob, BlobError, FieldHeader, FieldView, BLOB_HEADER_LEN};
-use beamfield_tools::field_cmd::{build_blob, run_query};
-use beamfield_tools::map::{load_map, Occupancy};
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::cmd::field::query::run_query;
+use beamfield_tools::input::map::{load_map, Occupancy};
 use host_tests::field_reference::{expected_distance, Grid};
 use proptest::prelude::*;
 
@@ -85,7 +86,7 @@ fn every_single_bit_flip_is_an_error() {
     }
 }
 
-fn grid_of(name: &str) -> (beamfield_tools::map::OccupancyMap, Grid) {
+fn grid_of(name: &str) -> (beamfield_tools::input::map::OccupancyMap, Grid) {
     let m = load_map(&host_tests::data_dir().join(name)).unwrap();
     let g = Grid {
         width: m.width as usize,

@@ -10,10 +10,10 @@ use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams, ENCODING_TI
 use beamfield::{BeamLayout, CastTrace, Pose, RayCaster, Scan, SensorMount};
 use beamfield_fixtures::demo_plan::{fine_search, COARSE, SIGMA_HIT_M, Z_HIT, Z_RAND};
 use beamfield_tools::beam_fit::map_from_log;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::blob::{build_blob, build_blob_clamped};
 use beamfield_tools::demo_assets::SCAN_INDICES;
-use beamfield_tools::field_cmd::{build_blob, build_blob_clamped};
-use beamfield_tools::map::load_map;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::map::load_map;
 
 const N: usize = 180;
 /// The clamp distance measured in docs/blob-format.md, metres.

@@ -4,7 +4,7 @@
 //! the full Willow transform.
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, EDT_INFINITY};
-use beamfield_tools::map::{load_map, Occupancy};
+use beamfield_tools::input::map::{load_map, Occupancy};
 use host_tests::field_reference::brute_squared;
 use proptest::prelude::*;
 

@@ -4,8 +4,8 @@
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, Pose, Scan, SensorMount};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::{load_map, Occupancy};
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::map::{load_map, Occupancy};
 use host_tests::field_reference::{expected_distance, lf_term, ray_cast, Grid};
 
 const N: usize = 360;

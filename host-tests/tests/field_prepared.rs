@@ -27,9 +27,9 @@
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams, PreparedScan};
 use beamfield::{math, BeamLayout, Pose, Scan, SensorMount, Stride};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::load_map;
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::map::load_map;
 
 const N: usize = 180;
 

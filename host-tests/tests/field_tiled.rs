@@ -10,10 +10,10 @@ use beamfield::field::{
 use beamfield::fixed_point::{FixedField, FixedLayout, FixedPose, FixedScan};
 use beamfield::{BeamLayout, Pose, RayCaster, Scan, SensorMount};
 use beamfield_fixtures::demo_plan::{fine_search, COARSE, SIGMA_HIT_M, Z_HIT, Z_RAND};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::blob::{build_blob, tile_blob, tile_blob_clamped};
 use beamfield_tools::demo_assets::SCAN_INDICES;
-use beamfield_tools::field_cmd::{build_blob, tile_blob, tile_blob_clamped};
-use beamfield_tools::map::load_map;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::map::load_map;
 use proptest::prelude::*;
 
 const N: usize = 180;

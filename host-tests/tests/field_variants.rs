@@ -3,8 +3,8 @@
 //! transform), and a variant of another geometry is a typed error.
 
 use beamfield::field::FieldView;
-use beamfield_tools::field_cmd::{build_blob, union_map, FieldCmdError};
-use beamfield_tools::map::{load_map, Occupancy};
+use beamfield_tools::blob::{build_blob, union_map, FieldError};
+use beamfield_tools::input::map::{load_map, Occupancy};
 use std::path::PathBuf;
 
 #[test]
@@ -44,7 +44,7 @@ fn union_field_is_the_per_cell_minimum() {
     other.width += 1;
     assert!(matches!(
         union_map(&map, &[(PathBuf::from("other.yaml"), other)]),
-        Err(FieldCmdError::VariantMismatch(p)) if p.as_path() == std::path::Path::new("other.yaml")
+        Err(FieldError::VariantMismatch(p)) if p.as_path() == std::path::Path::new("other.yaml")
     ));
 }
 
@@ -59,8 +59,8 @@ fn score_variants_names_the_closed_door_on_the_intel_map() {
     use beamfield::field::LikelihoodParams;
     use beamfield::{BeamLayout, Scan, SensorMount};
     use beamfield_tools::beam_fit::map_from_log;
-    use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-    use beamfield_tools::field_variants::{score_variants, ScoreVariantsError};
+    use beamfield_tools::blob::variants::{score_variants, ScoreVariantsError};
+    use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 
     let log = CarmenLog::read_path(
         &host_tests::data_dir().join("laser_intel_lab/intel-corrected.log"),
@@ -132,7 +132,7 @@ fn score_variants_names_the_closed_door_on_the_intel_map() {
     assert_eq!(far, 20);
 
     let params = LikelihoodParams::new(0.95, 0.05, 0.0588, max_range).unwrap();
-    let named = |v: Vec<(&str, &beamfield_tools::map::OccupancyMap)>| {
+    let named = |v: Vec<(&str, &beamfield_tools::input::map::OccupancyMap)>| {
         v.into_iter()
             .map(|(n, m)| (n.to_string(), m.clone()))
             .collect::<Vec<_>>()

@@ -29,8 +29,8 @@
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::fixed_point::{FixedField, FixedLayout, FixedPose, FixedScan, I16F16};
 use beamfield::{BeamLayout, Pose, Scan, SensorMount};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::{load_map, Occupancy, OccupancyMap};
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::map::{load_map, Occupancy, OccupancyMap};
 use host_tests::field_reference::{brute_squared, lf_term, ray_cast, Grid};
 use std::fmt::Write;
 

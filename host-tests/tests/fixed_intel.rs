@@ -15,8 +15,8 @@
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::fixed_point::{FixedField, FixedLayout, FixedPose, FixedScan};
 use beamfield::{BeamLayout, Pose, SensorMount};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::demo_assets::SCAN_INDICES;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 
 const N: usize = 180;
 /// The demo's grid (firmware/src/bin/demo.rs).

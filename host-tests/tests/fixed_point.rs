@@ -7,8 +7,8 @@ use beamfield::fixed_point::{
     FixedField, FixedLayout, FixedPose, FixedScan, I16F16, MAX_FIXED_BEAMS,
 };
 use beamfield::{BeamLayout, Pose, Scan, SensorMount};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::{load_map, Occupancy};
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::map::{load_map, Occupancy};
 use host_tests::field_reference::{ray_cast, Grid};
 
 const N: usize = 360;

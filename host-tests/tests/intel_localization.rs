@@ -35,9 +35,9 @@
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, SensorMount};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::OccupancyMap;
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::map::OccupancyMap;
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 use beamfield_tools::pose_grid::{argmax, score_grid, GridSpec};
 

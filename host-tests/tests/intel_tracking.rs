@@ -15,9 +15,9 @@
 
 use beamfield::field::LikelihoodParams;
 use beamfield::{Pose, SensorMount};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::field_cmd::{build_blob, build_free_space};
-use beamfield_tools::map::OccupancyMap;
+use beamfield_tools::blob::{build_blob, build_free_space};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::map::OccupancyMap;
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 use beamfield_tools::track::{run_once, Init, RunOptions, TrackInput, Weighting};
 

@@ -6,8 +6,8 @@ use beamfield::lidar::io::{Error, LidarReader};
 use beamfield::lidar::ld06::Ld06Decoder;
 use beamfield::lidar::xv11::Xv11Decoder;
 use beamfield::lidar::LidarPoint;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::lidar_cmd::{encode_scans, layout, Format, LayoutChoice, StreamOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::lidar_stream::{encode_scans, layout, Format, LayoutChoice, StreamOptions};
 use embedded_hal_nb::nb;
 use embedded_hal_nb::serial::{ErrorKind, ErrorType, Read};
 

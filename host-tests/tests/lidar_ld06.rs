@@ -14,7 +14,7 @@ use beamfield::lidar::assembler::sample_revolution;
 use beamfield::lidar::ld06::{self, Ld06Decoder, Ld06Sample};
 use beamfield::lidar::{AssemblerConfig, LidarPoint, ScanAssembler};
 use beamfield::{BeamLayout, Scan, SensorMount};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use proptest::prelude::*;
 use std::sync::OnceLock;
 

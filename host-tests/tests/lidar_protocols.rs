@@ -1,5 +1,5 @@
 //! The four protocols end to end on the real Intel lab log, through the same stream builder and
-//! decoder front-end as `beamfield lidar encode/decode` (`beamfield_tools::lidar_cmd`):
+//! decoder front-end as `beamfield lidar encode/decode` (`beamfield_tools::lidar_stream`):
 //! round trips to each protocol's resolution, the wrong decoder for a stream, and property tests
 //! over random damage of real streams.
 //!
@@ -8,8 +8,8 @@
 
 use beamfield::lidar::{AssemblerConfig, LidarPoint};
 use beamfield::BeamLayout;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::lidar_cmd::{
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::lidar_stream::{
     decode_stream, encode_scans, layout, AnyDecoder, Format, LayoutChoice, StreamOptions, MAX_BEAMS,
 };
 use proptest::prelude::*;

@@ -1,7 +1,7 @@
 //! YDLIDAR packets cut short and with single bits flipped, on real data.
 //!
 //! The first scans of the Intel lab log go through the CLI's stream builder
-//! (`beamfield_tools::lidar_cmd`, format `ydlidar`: a zero packet and nine packets of up to 40
+//! (`beamfield_tools::lidar_stream`, format `ydlidar`: a zero packet and nine packets of up to 40
 //! samples per revolution). Then, for every packet of the second revolution, every truncation
 //! (the packet cut after 1 … len − 1 bytes) and every single-bit flip of every byte is put in the
 //! stream between intact packets. What must hold, case by case: exactly the points of the intact
@@ -22,8 +22,8 @@
 
 use beamfield::lidar::ydlidar::{self, YdlidarDecoder};
 use beamfield::lidar::LidarPoint;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::lidar_cmd::{encode_scans, layout, Format, LayoutChoice, StreamOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::lidar_stream::{encode_scans, layout, Format, LayoutChoice, StreamOptions};
 
 fn intel_stream(scans: usize) -> Vec<u8> {
     let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");

@@ -16,9 +16,9 @@
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::{BeamLayout, Lag1, Pose, Scan, SensorModel, SensorMount, Stride, Tempered};
+use beamfield_tools::blob::build_blob;
 use beamfield_tools::calibrate::{calibrate, mass_above_truth, GridScores};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::{Occupancy, OccupancyMap};
+use beamfield_tools::input::map::{Occupancy, OccupancyMap};
 use host_tests::corridor::{corridor, SplitMix, World};
 use host_tests::splitmix::Draws;
 

@@ -14,9 +14,9 @@
 use beamfield::field::{FieldView, DEFAULT_MAX_DIST_M};
 use beamfield::RayCaster;
 use beamfield_tools::beam_fit::map_from_log;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::field_cmd::build_blob;
-use beamfield_tools::map::{load_map, OccupancyMap};
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::map::{load_map, OccupancyMap};
 use beamfield_tools::mapping::ray_cast_grid;
 use host_tests::splitmix::{Draws, SplitMix64};
 
@@ -108,7 +108,7 @@ fn intel_within_a_hundredth_of_a_cell() {
 #[test]
 fn intel_scan_scores_and_fit() {
     use beamfield::{BeamFieldModel, BeamIntrinsics, BeamModel, Pose, SensorModel};
-    use beamfield_tools::beam_fit::{fit_log, FitArgs, LambdaUpdate};
+    use beamfield_tools::beam_fit::{fit_log, FitOptions, LambdaUpdate};
     let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
     let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
     let max = log.max_range.value_m().unwrap();
@@ -150,9 +150,7 @@ fn intel_scan_scores_and_fit() {
             want.log_likelihood
         );
     }
-    let args = FitArgs {
-        field: "unused".into(),
-        log: path,
+    let args = FitOptions {
         iterations: 24,
         lambda: LambdaUpdate::Truncated,
         scans: Some((0, 200)),

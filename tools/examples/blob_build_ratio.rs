@@ -5,8 +5,8 @@
 //! Usage: `blob_build_ratio MAP.yaml [ROUNDS]` (default 7 rounds). The criterion bench
 //! `cargo bench -p host-tests --bench field -- blob_build` measures the same two builds.
 
-use beamfield_tools::field_cmd::{build_blob_encoded, Encoding};
-use beamfield_tools::map::load_map;
+use beamfield_tools::blob::{build_blob_encoded, Encoding};
+use beamfield_tools::input::map::load_map;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;

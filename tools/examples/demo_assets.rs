@@ -4,8 +4,8 @@
 //!
 //! Usage: `demo_assets LOG BLOB_DIR SOURCE_DIR`.
 
+use beamfield_tools::blob::tile_blob;
 use beamfield_tools::demo_assets::generate;
-use beamfield_tools::field_cmd::tile_blob;
 use std::path::PathBuf;
 use std::process::ExitCode;
 

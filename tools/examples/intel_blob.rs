@@ -3,8 +3,8 @@
 
 use beamfield::field::DEFAULT_MAX_DIST_M;
 use beamfield_tools::beam_fit::map_from_log;
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::field_cmd::build_blob;
+use beamfield_tools::blob::build_blob;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {

@@ -1,9 +1,10 @@
-//! `beamfield fit`: fit the beam model's intrinsics (Thrun Table 6.2, the crate's EM) to a
+//! Fitting the beam model's intrinsics (Thrun Table 6.2, the crate's EM) to a
 //! CARMEN log with known poses, `z*` ray cast through a distance-field blob exactly as the
-//! device does it ([`beamfield::RayCaster`]). Also the map helpers the tests and benches share.
+//! device does it ([`beamfield::RayCaster`]); the CLI is [`crate::cmd::fit`]. Also the map helpers the
+//! tests and benches share.
 
-use crate::carmen::{CarmenLog, LogError, ReadOptions};
-use crate::map::{Occupancy, OccupancyMap};
+use crate::input::carmen::{CarmenLog, LogError};
+use crate::input::map::{Occupancy, OccupancyMap};
 use crate::mapping::{build_from_log, GridGeometry, MappingError, MappingOptions, OccupiedCells};
 use beamfield::em::{fit_slices, EmConfig, EmError, EmFit, ShapeUpdate, StopReason};
 use beamfield::field::{BlobError, FieldView};
@@ -64,20 +65,9 @@ pub enum LambdaUpdate {
 /// shared logs; the trace holds one f64 per iteration).
 pub const MAX_FIT_ITERATIONS: u32 = 10_000;
 
-/// `beamfield fit`: EM for the beam model's intrinsics on a log.
-///
-/// Casts z* once per beam from the logged laser poses through the blob (as the device would),
-/// then runs EM over the (z, z*) pairs starting from AMCL's defaults. Prints the fitted
-/// intrinsics under their AMCL parameter names, the trace (mean log-likelihood per beam after
-/// each M-step, nats), why EM stopped and the time taken. Progress goes to stderr.
-#[derive(Args, Debug)]
-pub struct FitArgs {
-    /// The distance-field blob of the map (`beamfield field build`).
-    #[arg(long)]
-    pub field: PathBuf,
-    /// The CARMEN log (FLASER lines with corrected poses).
-    #[arg(long)]
-    pub log: PathBuf,
+/// The options of a fit: which scans and beams, how many iterations, which M-step.
+#[derive(Args, Debug, Clone, Copy)]
+pub struct FitOptions {
     /// Largest number of EM iterations (M-steps), at most 10,000.
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(..=i64::from(MAX_FIT_ITERATIONS)))]
     pub iterations: u32,
@@ -95,7 +85,11 @@ pub struct FitArgs {
     pub max_range: Option<f32>,
 }
 
-fn parse_range(s: &str) -> Result<(usize, usize), String> {
+/// Parses `A..B` (`fit --scans`).
+///
+/// # Errors
+/// A message for clap.
+pub fn parse_range(s: &str) -> Result<(usize, usize), String> {
     let (a, b) = s
         .split_once("..")
         .ok_or_else(|| format!("`{s}`: expected A..B"))?;
@@ -113,7 +107,7 @@ pub enum FitError {
     /// Reading the blob file.
     Io(PathBuf, std::io::Error),
     /// A file that is not a regular file or over its size limit (docs/resource-limits.md).
-    Read(crate::limits::ReadError),
+    Read(crate::input::limits::ReadError),
     /// The blob is invalid.
     Blob(PathBuf, BlobError),
     /// The blob cannot be ray cast.
@@ -187,7 +181,7 @@ impl FitReport {
 pub fn fit_log(
     view: FieldView<'_>,
     log: &CarmenLog,
-    args: &FitArgs,
+    args: &FitOptions,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<FitReport, FitError> {
     let stride = Stride::new(args.stride).ok_or(FitError::BadStride)?;
@@ -270,7 +264,8 @@ pub fn fit_log(
     })
 }
 
-fn stop_name(s: StopReason) -> String {
+/// The name of why EM stopped, as reported.
+pub fn stop_name(s: StopReason) -> String {
     match s {
         StopReason::Converged => "converged".into(),
         StopReason::IterationLimit => "iteration limit".into(),
@@ -291,87 +286,4 @@ pub fn amcl_pairs(i: &BeamIntrinsics) -> [(&'static str, f32); 7] {
         (Param::LambdaShort.amcl_name(), i.lambda_short_per_m()),
         (Param::MaxRange.amcl_name(), i.max_range_m()),
     ]
-}
-
-/// Runs `beamfield fit` and returns what to print on stdout.
-///
-/// # Errors
-/// [`FitError`].
-pub fn run(args: &FitArgs, json: bool) -> Result<String, FitError> {
-    let bytes = crate::limits::read_regular_file(
-        &args.field,
-        crate::limits::MAX_FIELD_FILE_BYTES,
-        "field file",
-    )
-    .map_err(FitError::Read)?;
-    let view = crate::field_cmd::parse_field_file(&bytes)
-        .map_err(|e| FitError::Blob(args.field.clone(), e))?;
-    let t_read = Instant::now();
-    let log = CarmenLog::read_path(
-        &args.log,
-        ReadOptions {
-            max_range_m: args.max_range,
-            skip_bad_lines: false,
-        },
-    )
-    .map_err(FitError::Log)?;
-    let read_s = t_read.elapsed().as_secs_f64();
-    let progress = crate::progress::Progress::new("casting z*: scan");
-    let r = fit_log(view, &log, args, |done, total| {
-        progress.update(done, total, "")
-    })?;
-    let intr = r.fit.intrinsics;
-    let decrease = r.largest_decrease();
-    if json {
-        let params: serde_json::Map<String, serde_json::Value> = amcl_pairs(&intr)
-            .iter()
-            .map(|(k, v)| ((*k).to_string(), serde_json::json!(v)))
-            .collect();
-        let v = serde_json::json!({
-            "intrinsics": params,
-            "stop": stop_name(r.fit.stop),
-            "iterations": r.fit.iterations,
-            "passes": r.fit.passes,
-            "trace_nats_per_beam": r.trace,
-            "trace_dropped": r.fit.trace_dropped,
-            "trace_largest_decrease": decrease,
-            "scans": r.scans,
-            "readings_with_z_star": r.pairs,
-            "readings_used": r.fit.counts.used,
-            "readings_invalid": r.fit.counts.invalid,
-            "readings_unexplained": r.fit.counts.unexplained,
-            "read_s": read_s,
-            "cast_s": r.cast_s,
-            "em_s": r.em_s,
-        });
-        return Ok(v.to_string());
-    }
-    let mut out = String::new();
-    out.push_str("fitted beam-model intrinsics (AMCL names):\n");
-    for (k, v) in amcl_pairs(&intr) {
-        out.push_str(&format!("  {k:<20} {v:.6}\n"));
-    }
-    out.push_str(&format!(
-        "stopped: {} after {} iterations ({} passes)\n",
-        stop_name(r.fit.stop),
-        r.fit.iterations,
-        r.fit.passes
-    ));
-    out.push_str(&format!(
-        "data: {} scans, {} pairs, {} used, {} invalid, {} unexplained\n",
-        r.scans, r.pairs, r.fit.counts.used, r.fit.counts.invalid, r.fit.counts.unexplained
-    ));
-    out.push_str("trace (mean log-likelihood per beam, nats):\n");
-    for (t, l) in r.trace.iter().enumerate() {
-        out.push_str(&format!("  {t:>4} {l:.9}\n"));
-    }
-    out.push_str(&format!(
-        "trace never decreases: {} (largest decrease {decrease:.3e})\n",
-        decrease <= 0.0
-    ));
-    out.push_str(&format!(
-        "time: read log {:.3} s, cast z* {:.3} s, EM {:.3} s",
-        read_s, r.cast_s, r.em_s
-    ));
-    Ok(out)
 }

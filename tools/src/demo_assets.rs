@@ -4,9 +4,9 @@
 //! `cargo xtask demo-assets` writes the blobs to [`BLOB_DIR`] and the scans to [`SOURCE_DIR`]; a
 //! host test regenerates them and fails if the checked-in files differ, so they cannot go stale.
 
-use crate::carmen::{CarmenLog, ReadOptions};
-use crate::field_cmd::build_blob;
-use crate::map::load_map;
+use crate::blob::build_blob;
+use crate::input::carmen::{CarmenLog, ReadOptions};
+use crate::input::map::load_map;
 use crate::mapping::{
     build_from_log, write_map_server, MappingOptions, FREE_THRESH, OCCUPIED_THRESH,
 };

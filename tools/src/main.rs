@@ -1,6 +1,8 @@
 //! `beamfield`: the host command-line tool. Run `beamfield --help`.
 
 use clap::{Parser, Subcommand};
+use serde::Serialize;
+use std::fmt::Display;
 use std::process::ExitCode;
 
 /// Host tools for beamfield: build distance-field blobs from maps, read logs, score scans,
@@ -23,38 +25,38 @@ enum Command {
     Info,
     /// Distance-field blobs for the likelihood field: build one from a ROS map, query it,
     /// render it as a picture.
-    Field(beamfield_tools::field_cmd::FieldArgs),
+    Field(beamfield_tools::cmd::field::FieldArgs),
     /// Log-likelihood of one scan of a CARMEN log at a pose (likelihood field over a blob),
     /// optionally a score surface around it (--grid: CSV and PNG).
-    Score(beamfield_tools::score_cmd::ScoreArgs),
+    Score(beamfield_tools::cmd::score::ScoreArgs),
     /// The smallest tempering κ whose credible sets over a local pose grid hold the logged
     /// poses at the requested rate; coverage at κ = 1 and at κ, and a coverage-vs-κ PNG.
-    Calibrate(beamfield_tools::score_cmd::CalibrateArgs),
+    Calibrate(beamfield_tools::cmd::calibrate::CalibrateArgs),
     /// Monte Carlo localization over a whole CARMEN log against its logged poses (odometry
     /// synthesized from them with the motion model's noise): tracking error, global
     /// localization, kidnapping; a PNG of the tracks over the map.
-    Track(beamfield_tools::track::TrackArgs),
+    Track(beamfield_tools::cmd::track::TrackArgs),
     /// Fit the beam model's intrinsics (EM) to a CARMEN log, z* ray cast through a blob.
-    Fit(beamfield_tools::beam_fit::FitArgs),
+    Fit(beamfield_tools::cmd::fit::FitArgs),
     /// Ultrasonic ring tools (firing schedules and crosstalk).
     #[command(subcommand)]
-    Sonar(beamfield_tools::sonar::SonarCommand),
+    Sonar(beamfield_tools::cmd::sonar::SonarCommand),
     /// Build maps: `map from-log` turns a CARMEN laser log with known poses into a ROS
     /// map_server map (YAML + PGM).
     Map {
         #[command(subcommand)]
-        command: beamfield_tools::carmen_cli::MapCommand,
+        command: beamfield_tools::cmd::map::MapCommand,
     },
     /// Inspect laser logs: `log info` summarizes a CARMEN log (scans, beams, max-range value,
     /// pose extent, malformed lines).
     Log {
         #[command(subcommand)]
-        command: beamfield_tools::carmen_cli::LogCommand,
+        command: beamfield_tools::cmd::log::LogCommand,
     },
     /// LiDAR byte streams: `lidar encode` writes a CARMEN log's scans as an LD06, RPLIDAR or
     /// XV-11 stream; `lidar decode` decodes a stream into scans and counters.
     #[command(subcommand)]
-    Lidar(beamfield_tools::lidar_cmd::LidarCommand),
+    Lidar(beamfield_tools::cmd::lidar::LidarCommand),
     /// The device's link to ROS 2, as nav2_amcl speaks it: estimates on amcl_pose, the
     /// map → odom transform on /tf, initialpose and nav2_amcl's services to the device
     /// (docs/nav2.md).
@@ -64,101 +66,87 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Bridge(args) => match beamfield_bridge::run(&args) {
-            Ok(report) => {
-                if cli.json {
-                    match serde_json::to_string_pretty(&report) {
-                        Ok(j) => println!("{j}"),
-                        Err(e) => {
-                            eprintln!("beamfield bridge: {e}");
-                            return ExitCode::FAILURE;
-                        }
-                    }
-                } else {
-                    print!("{report}");
-                }
-                ExitCode::SUCCESS
+        Command::Bridge(args) => finish("beamfield bridge", beamfield_bridge::run(&args), cli.json),
+        Command::Info => finish(
+            "beamfield info",
+            Ok::<_, std::convert::Infallible>(beamfield_tools::cmd::info::run()),
+            cli.json,
+        ),
+        Command::Field(args) => {
+            let r = beamfield_tools::cmd::field::run(args, cli.json);
+            match &r {
+                Ok(report) if report.streamed() => ExitCode::SUCCESS,
+                _ => finish("beamfield field", r, cli.json),
             }
-            Err(e) => {
-                eprintln!("beamfield bridge: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Command::Info => {
-            println!("{}", beamfield_tools::info::render(cli.json));
-            ExitCode::SUCCESS
         }
-        Command::Field(args) => match beamfield_tools::field_cmd::run(args, cli.json) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("beamfield field: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Command::Score(args) => print_or_fail(
-            "score",
-            beamfield_tools::score_cmd::run_score(&args, cli.json),
+        Command::Score(args) => finish(
+            "beamfield score",
+            beamfield_tools::cmd::score::run(&args),
+            cli.json,
         ),
-        Command::Calibrate(args) => print_or_fail(
-            "calibrate",
-            beamfield_tools::score_cmd::run_calibrate(&args, cli.json),
+        Command::Calibrate(args) => finish(
+            "beamfield calibrate",
+            beamfield_tools::cmd::calibrate::run(&args),
+            cli.json,
         ),
-        Command::Track(args) => match beamfield_tools::track::run(&args, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield track: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Command::Fit(args) => match beamfield_tools::beam_fit::run(&args, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield fit: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Command::Sonar(cmd) => match beamfield_tools::sonar::run(&cmd, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield sonar: {e}");
-                ExitCode::FAILURE
-            }
-        },
-        Command::Map { command } => beamfield_tools::carmen_cli::run_map(command, cli.json),
-        Command::Log { command } => beamfield_tools::carmen_cli::run_log(command, cli.json),
-        Command::Lidar(cmd) => match beamfield_tools::lidar_cmd::run(&cmd, cli.json) {
-            Ok(out) => {
-                println!("{out}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => {
-                eprintln!("beamfield lidar: {e}");
-                ExitCode::FAILURE
-            }
-        },
+        Command::Track(args) => finish(
+            "beamfield track",
+            beamfield_tools::cmd::track::run(&args),
+            cli.json,
+        ),
+        Command::Fit(args) => finish(
+            "beamfield fit",
+            beamfield_tools::cmd::fit::run(&args),
+            cli.json,
+        ),
+        Command::Sonar(cmd) => finish(
+            "beamfield sonar",
+            beamfield_tools::cmd::sonar::run(&cmd),
+            cli.json,
+        ),
+        Command::Map { command } => finish(
+            "error",
+            beamfield_tools::cmd::map::run_map(&command),
+            cli.json,
+        ),
+        Command::Log { command } => finish(
+            "error",
+            beamfield_tools::cmd::log::run_log(&command),
+            cli.json,
+        ),
+        Command::Lidar(cmd) => finish(
+            "beamfield lidar",
+            beamfield_tools::cmd::lidar::run(&cmd),
+            cli.json,
+        ),
     }
 }
 
-fn print_or_fail(
-    name: &str,
-    r: Result<String, beamfield_tools::score_cmd::ScoreCmdError>,
+/// Prints a command's report once, as JSON (`--json`: keys in sorted order, as every report
+/// has always printed them) or as text, and returns success; or prints the error on stderr
+/// after `prefix` and returns failure.
+fn finish<R: Serialize + Display, E: Display>(
+    prefix: &str,
+    r: Result<R, E>,
+    json: bool,
 ) -> ExitCode {
     match r {
-        Ok(out) => {
-            println!("{out}");
+        Ok(report) => {
+            if json {
+                match serde_json::to_value(&report) {
+                    Ok(v) => println!("{v}"),
+                    Err(e) => {
+                        eprintln!("{prefix}: the report cannot be written as JSON: {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            } else {
+                println!("{report}");
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {
-            eprintln!("beamfield {name}: {e}");
+            eprintln!("{prefix}: {e}");
             ExitCode::FAILURE
         }
     }

@@ -10,7 +10,7 @@
 /// and its host check, includes it from there.
 pub const PATH: &str = "fixtures/assets/track.rs";
 
-use crate::carmen::{CarmenLog, ReadOptions};
+use crate::input::carmen::{CarmenLog, ReadOptions};
 use crate::track::synthesize_odometry;
 use beamfield::mcl::OdometryNoise;
 use std::fmt::Write as _;

@@ -5,12 +5,12 @@
 
 mod common;
 
-use beamfield_tools::lidar_cmd::{
-    self, encode_scans, Format, LidarCmdError, StreamDecoder, StreamOptions,
-};
-use beamfield_tools::limits::{
+use beamfield_tools::input::limits::{
     MAX_CAPTURE_BYTES, MAX_DECODED_SCANS, MAX_FIELD_FILE_BYTES, MAX_QUERY_LINE_BYTES,
     MAX_TEXT_FILE_BYTES,
+};
+use beamfield_tools::lidar_stream::{
+    self, encode_scans, Format, LidarError, StreamDecoder, StreamOptions,
 };
 use common::{one_line_error, run_bounded};
 use std::path::{Path, PathBuf};
@@ -234,12 +234,12 @@ fn lidar_decode_reads_a_capped_stream() {
 
 #[test]
 fn lidar_decode_keeps_a_bounded_number_of_scans() {
-    let log = beamfield_tools::carmen::CarmenLog::read_path(
+    let log = beamfield_tools::input::carmen::CarmenLog::read_path(
         Path::new(&intel_log()),
-        beamfield_tools::carmen::ReadOptions::default(),
+        beamfield_tools::input::carmen::ReadOptions::default(),
     )
     .unwrap();
-    let layout: beamfield::BeamLayout<{ lidar_cmd::MAX_BEAMS }> = log
+    let layout: beamfield::BeamLayout<{ lidar_stream::MAX_BEAMS }> = log
         .layout_with_mount(beamfield::SensorMount::CENTERED)
         .unwrap();
     let scans: Vec<Vec<f32>> = log
@@ -257,7 +257,7 @@ fn lidar_decode_keeps_a_bounded_number_of_scans() {
         seed: 1,
     };
     let (stream, _) = encode_scans(&layout, &scans, &options, |_| {}).unwrap();
-    let full = lidar_cmd::layout(lidar_cmd::LayoutChoice::Full, 70.0).unwrap();
+    let full = lidar_stream::layout(lidar_stream::LayoutChoice::Full, 70.0).unwrap();
     let config = beamfield::lidar::AssemblerConfig::for_layout(&full);
     let decode = |max_scans: usize| {
         let mut d = StreamDecoder::new(Format::Ld06, &full, config, max_scans).unwrap();
@@ -266,7 +266,7 @@ fn lidar_decode_keeps_a_bounded_number_of_scans() {
     let all = decode(MAX_DECODED_SCANS).unwrap();
     assert_eq!(all.scans.len(), 30);
     assert_eq!(decode(30).unwrap().scans.len(), 30);
-    assert!(matches!(decode(29), Err(LidarCmdError::TooManyScans)));
+    assert!(matches!(decode(29), Err(LidarError::TooManyScans)));
 }
 
 #[test]
@@ -477,7 +477,7 @@ fn score_variants_takes_at_most_16_variants() {
 #[test]
 fn field_encode_decodes_at_most_as_many_cells_as_a_raw_file_holds() {
     use beamfield::field::{emit_blob_tiled, tiled_max_len, tiled_scratch_len, FieldHeader};
-    use beamfield_tools::field_cmd::MAX_DECODED_CELLS;
+    use beamfield_tools::blob::MAX_DECODED_CELLS;
     let d = scratch("encode-cells");
     // 12,000 × 12,000 = 144 M cells in an 18 MB tiled file (2 bytes of index per 16 cells):
     // decoded, more than a raw blob within the file limit holds.

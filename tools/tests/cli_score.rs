@@ -4,7 +4,7 @@
 
 use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
 use beamfield::{Pose, SensorMount};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use std::path::PathBuf;
 use std::process::Command;
 

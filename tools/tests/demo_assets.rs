@@ -33,7 +33,7 @@ fn checked_in_demo_assets_are_current() {
     let tiled =
         std::fs::read(assets.join("intel-tiled.bin")).expect("firmware/assets/intel-tiled.bin");
     assert!(
-        tiled == beamfield_tools::field_cmd::tile_blob(&fresh.blob).expect("tile"),
+        tiled == beamfield_tools::blob::tile_blob(&fresh.blob).expect("tile"),
         "firmware/assets/intel-tiled.bin is stale: run `cargo xtask demo-assets`"
     );
     // And the blob is one the device accepts.

@@ -2,7 +2,7 @@
 //! `data/laser_intel_lab/README.md` (counted independently of this code).
 
 use beamfield::Reading;
-use beamfield_tools::carmen::{CarmenLog, MaxRange, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, MaxRange, ReadOptions};
 
 fn intel() -> CarmenLog {
     let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");

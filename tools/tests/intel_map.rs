@@ -2,10 +2,11 @@
 //! scans it was built from, round-trips through map_server's file format as read by independent
 //! parsers (serde_yaml, the `image` crate's PNM decoder), and renders to a PNG.
 
-use beamfield_tools::carmen::{CarmenLog, LaserScan, ReadOptions};
+use beamfield_tools::draw::map_picture::write_png;
+use beamfield_tools::input::carmen::{CarmenLog, LaserScan, ReadOptions};
 use beamfield_tools::mapping::{
-    build_from_log, endpoint_agreement, write_map_server, write_png, Cell, MappingOptions,
-    OccupancyGrid, FREE_THRESH, OCCUPIED_THRESH,
+    build_from_log, endpoint_agreement, write_map_server, Cell, MappingOptions, OccupancyGrid,
+    FREE_THRESH, OCCUPIED_THRESH,
 };
 use std::path::PathBuf;
 
@@ -187,7 +188,7 @@ fn map_round_trips_through_map_server_files_and_renders() {
 /// disagreement means a wrong bearing convention, a wrong traversal or a transient object).
 #[test]
 fn ray_cast_on_the_intel_map_agrees_with_the_measured_ranges() {
-    use beamfield_tools::carmen::carmen_bearing_rad;
+    use beamfield_tools::input::carmen::carmen_bearing_rad;
     use beamfield_tools::mapping::ray_cast_grid;
     let log = intel();
     let grid = intel_map(&log);

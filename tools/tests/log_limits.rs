@@ -4,7 +4,7 @@
 
 mod common;
 
-use beamfield_tools::carmen::{CarmenLog, LineErrorKind, ReadOptions, MAX_LINE_BYTES};
+use beamfield_tools::input::carmen::{CarmenLog, LineErrorKind, ReadOptions, MAX_LINE_BYTES};
 use common::bin;
 use std::io::{BufReader, Read};
 
@@ -114,7 +114,7 @@ fn scratch(name: &str) -> std::path::PathBuf {
 fn too_large(path: &str) -> String {
     format!(
         "error: {path} is larger than {} bytes, the limit for a CARMEN log",
-        beamfield_tools::limits::MAX_LOG_BYTES
+        beamfield_tools::input::limits::MAX_LOG_BYTES
     )
 }
 
@@ -163,7 +163,7 @@ fn a_regular_log_over_256_mib_is_refused() {
     let path = d.join("big.log");
     std::fs::File::create(&path)
         .unwrap()
-        .set_len(beamfield_tools::limits::MAX_LOG_BYTES + 1)
+        .set_len(beamfield_tools::input::limits::MAX_LOG_BYTES + 1)
         .unwrap();
     let p = path.display().to_string();
     let o = common::run_bounded(&["log", "info", &p], None);
@@ -173,7 +173,7 @@ fn a_regular_log_over_256_mib_is_refused() {
 
 #[test]
 fn bad_lines_are_all_counted_the_first_1000_kept_and_quoted_short() {
-    use beamfield_tools::carmen::MAX_BAD_LINES_KEPT;
+    use beamfield_tools::input::carmen::MAX_BAD_LINES_KEPT;
     let d = scratch("badlines");
     let path = d.join("bad.log");
     let mut text = String::new();
@@ -217,7 +217,9 @@ fn bad_lines_are_all_counted_the_first_1000_kept_and_quoted_short() {
 
 #[test]
 fn a_log_holds_a_bounded_number_of_scans_params_and_message_types() {
-    use beamfield_tools::carmen::{LogError, MAX_LOG_MESSAGE_TYPES, MAX_LOG_PARAMS, MAX_LOG_SCANS};
+    use beamfield_tools::input::carmen::{
+        LogError, MAX_LOG_MESSAGE_TYPES, MAX_LOG_PARAMS, MAX_LOG_SCANS,
+    };
     let too_many = |text: &str| match CarmenLog::read(text.as_bytes(), skip_bad()) {
         Err(LogError::TooMany(what, limit)) => (what, limit),
         other => panic!("expected TooMany, got {other:?}"),

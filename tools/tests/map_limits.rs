@@ -4,7 +4,7 @@
 
 mod common;
 
-use beamfield_tools::map::{load_map, load_map_limited, MapError, DEFAULT_MAX_CELLS};
+use beamfield_tools::input::map::{load_map, load_map_limited, MapError, DEFAULT_MAX_CELLS};
 use common::bin;
 use std::path::PathBuf;
 

@@ -8,7 +8,7 @@ use beamfield::{
     BeamFieldModel, BeamIntrinsics, BeamLayout, BeamModel, FieldView, LikelihoodField,
     LikelihoodParams, Pose, RayCaster, Scan, SensorMount,
 };
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 
 /// Beams per FLASER scan of the Intel log.
 pub const N: usize = 180;

@@ -30,15 +30,19 @@
 //! `p = 1 − 1/(1 + e^L)`. A cell never observed stays at p = 0.5: unknown. So one hit makes a
 //! cell occupied; a cell needs four net misses to become free.
 
+mod error;
 pub mod grid;
 pub mod raycast;
 pub mod writer;
 
+use error::f64_spacing;
+pub use error::{MappingError, MAX_CELLS, MAX_COORDINATE_ULP_CELLS};
+
 pub use grid::{Cell, GridError, GridGeometry, OccupancyGrid, OccupiedCells};
 pub use raycast::{ray_cast_grid, traverse};
-pub use writer::{pgm_bytes, write_map_server, write_png, yaml_text, MapIoError, MapServerMap};
+pub use writer::{pgm_bytes, write_map_server, yaml_text, MapIoError, MapServerMap};
 
-use crate::carmen::{CarmenLog, Extent, LaserScan};
+use crate::input::carmen::{CarmenLog, Extent, LaserScan};
 use beamfield::Reading;
 use std::ops::ControlFlow;
 
@@ -66,7 +70,7 @@ pub struct MappingOptions {
     pub max_range_free_m: Option<f64>,
     /// Readings at or above this are max-range readings, metres (normally the log's value).
     pub max_range_m: f32,
-    /// Largest grid built, cells (default [`crate::map::DEFAULT_MAX_CELLS`], 2²⁴, what
+    /// Largest grid built, cells (default [`crate::input::map::DEFAULT_MAX_CELLS`], 2²⁴, what
     /// `field build` takes by default; at most [`MAX_CELLS`]). The builder needs about 13 bytes
     /// per cell, and two poses 300 m apart already span 36 M cells at 5 cm.
     pub max_cells: u64,
@@ -84,7 +88,7 @@ impl MappingOptions {
             max_log_odds: 3.5,
             max_range_free_m: Some(8.0),
             max_range_m,
-            max_cells: crate::map::DEFAULT_MAX_CELLS,
+            max_cells: crate::input::map::DEFAULT_MAX_CELLS,
         }
     }
 
@@ -114,87 +118,6 @@ impl MappingOptions {
         }
     }
 }
-
-/// Errors building a map.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[non_exhaustive]
-pub enum MappingError {
-    /// The log has no scan with a valid reading.
-    NoData,
-    /// An option is out of range (resolution or margin ≤ 0 or not finite, increments of the
-    /// wrong sign, clamps not around 0, max range not positive).
-    BadOptions,
-    /// The extent at this resolution needs more than [`MappingOptions::max_cells`] cells.
-    TooLarge {
-        /// Cells along x.
-        width: u64,
-        /// Cells along y.
-        height: u64,
-        /// The limit, cells.
-        max_cells: u64,
-    },
-    /// The map lies so far from the origin that f64 coordinates there are spaced more than
-    /// [`MAX_COORDINATE_ULP_CELLS`] of a cell apart: cells could not be told apart reliably.
-    Imprecise {
-        /// The largest coordinate magnitude of the map (its extent with the margin), metres.
-        magnitude_m: f64,
-        /// The spacing of f64 values at that magnitude, metres.
-        spacing_m: f64,
-        /// The resolution asked for, metres.
-        resolution_m: f64,
-    },
-}
-
-/// Largest spacing of f64 coordinates allowed at the map's farthest point, as a fraction of
-/// a cell: 1/1024. The builder computes cells from world coordinates in f64
-/// (`(x − origin) / resolution`), so a coordinate is off by up to this spacing; at 1/1024 of
-/// a cell, only end points within a thousandth of a cell from a cell edge can land in the
-/// neighbouring cell. At 0.05 m cells this allows coordinates up to 2³⁸ m (2.7·10¹¹ m).
-pub const MAX_COORDINATE_ULP_CELLS: f64 = 1.0 / 1024.0;
-
-/// The spacing of f64 values at magnitude `m` (its unit in the last place).
-fn f64_spacing(m: f64) -> f64 {
-    let m = m.abs();
-    if !m.is_finite() {
-        return f64::INFINITY;
-    }
-    let next = f64::from_bits(m.to_bits() + 1);
-    next - m
-}
-
-/// Largest [`MappingOptions::max_cells`] (2²⁸ cells, 1 GiB of log-odds, 3.2 GiB in all).
-pub const MAX_CELLS: u64 = 1 << 28;
-
-impl std::fmt::Display for MappingError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::NoData => f.write_str("the log has no scan with a valid reading"),
-            Self::BadOptions => f.write_str("mapping options out of range"),
-            Self::TooLarge {
-                width,
-                height,
-                max_cells,
-            } => write!(
-                f,
-                "map of {width} × {height} = {} cells is over the limit of {max_cells}; use a \
-                 coarser resolution (or raise the limit with --max-cells)",
-                width.saturating_mul(*height)
-            ),
-            Self::Imprecise {
-                magnitude_m,
-                spacing_m,
-                resolution_m,
-            } => write!(
-                f,
-                "poses and end points reach {magnitude_m:e} m from the origin, where f64 \
-                 coordinates are {spacing_m:e} m apart: more than 1/1024 of a {resolution_m} m \
-                 cell; move the log nearer the origin or use a coarser resolution"
-            ),
-        }
-    }
-}
-
-impl std::error::Error for MappingError {}
 
 /// Counters of what the builder did with the readings.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -273,7 +196,7 @@ fn beam_segment(scan: &LaserScan, i: usize, options: &MappingOptions) -> Option<
     let z = *scan.ranges_m.get(i)?;
     let n = scan.ranges_m.len();
     let p = scan.pose_f64;
-    let a = p.theta_rad + crate::carmen::carmen_bearing_rad(i, n);
+    let a = p.theta_rad + crate::input::carmen::carmen_bearing_rad(i, n);
     let (s, c) = a.sin_cos();
     let start = (p.x_m, p.y_m);
     let (length, hit) = match Reading::classify(z, options.max_range_m) {
@@ -453,126 +376,4 @@ pub fn endpoint_agreement(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::carmen::MaxRange;
-    use beamfield::Pose;
-
-    const NO_RETURN: f32 = 40.0;
-
-    fn log_of(scans: &[(Pose, Vec<f32>)]) -> CarmenLog {
-        CarmenLog {
-            scans: scans
-                .iter()
-                .enumerate()
-                .map(|(k, (pose, ranges))| LaserScan {
-                    ranges_m: ranges.clone(),
-                    pose: *pose,
-                    odom_pose: *pose,
-                    pose_f64: (*pose).into(),
-                    timestamp_s: k as f64,
-                    logger_timestamp_s: k as f64,
-                    line: k + 1,
-                })
-                .collect(),
-            max_range: MaxRange::Given(NO_RETURN),
-            ..CarmenLog::default()
-        }
-    }
-
-    fn build(log: &CarmenLog, free_cap: Option<f64>) -> (OccupancyGrid, MappingStats) {
-        let mut o = MappingOptions::new(NO_RETURN);
-        o.resolution_m = 0.1;
-        o.max_range_free_m = free_cap;
-        let (g, stats) = build_from_log(log, &o, |_, _| {}).unwrap();
-        (g.to_occupancy(OCCUPIED_THRESH, FREE_THRESH), stats)
-    }
-
-    fn at(grid: &OccupancyGrid, x: f64, y: f64) -> Cell {
-        let (c, r) = grid.geometry().cell_of(x, y).unwrap();
-        grid.get(c, r).unwrap()
-    }
-
-    #[test]
-    fn max_range_readings_clear_up_to_the_cap_only() {
-        // Five identical scans of 180 no-return beams from (0.05, 0.05) facing +x, cap 1 m:
-        // a crossed cell gets 5 misses (once per scan) → −2.0 (clamped), p ≈ 0.12 < 0.196: free.
-        let pose = Pose::new(0.05, 0.05, 0.0);
-        let scans = vec![(pose, vec![NO_RETURN; 180]); 5];
-        let (grid, stats) = build(&log_of(&scans), Some(1.0));
-        assert_eq!(stats.max_range, 900);
-        assert_eq!(stats.hits, 0);
-        assert_eq!(
-            grid.counts().0,
-            0,
-            "no occupied cell from max-range readings"
-        );
-        assert_eq!(at(&grid, 0.55, 0.05), Cell::Free); // ahead, within the cap
-        assert_eq!(at(&grid, 0.05, -0.55), Cell::Free); // the −90° beam
-        assert_eq!(at(&grid, 1.45, 0.05), Cell::Unknown); // beyond the cap
-        assert_eq!(at(&grid, -0.55, 0.05), Cell::Unknown); // behind the sensor
-                                                           // With no free-space claim for max-range readings: nothing at all.
-        let (grid, _) = build(&log_of(&scans), None);
-        assert_eq!(grid.counts().0 + grid.counts().1, 0);
-    }
-
-    #[test]
-    fn hits_are_occupied_and_the_ray_before_them_free() {
-        // n = 3: bearings −90°, −30°, +30°. A wall at x = 2.05 m: the ±30° beams read
-        // 2.0/cos 30° from (0.05, 0.05); the −90° beam has no return.
-        let z = (2.0 / 30f64.to_radians().cos()) as f32;
-        let pose = Pose::new(0.05, 0.05, 0.0);
-        let scans = vec![(pose, vec![NO_RETURN, z, z]); 5];
-        let (grid, stats) = build(&log_of(&scans), None);
-        assert_eq!((stats.hits, stats.max_range), (10, 5));
-        let dy = 2.0 * 30f64.to_radians().tan();
-        assert_eq!(at(&grid, 2.05, 0.05 + dy), Cell::Occupied);
-        assert_eq!(at(&grid, 2.05, 0.05 - dy), Cell::Occupied);
-        assert_eq!(at(&grid, 1.05, 0.05 + dy / 2.0), Cell::Free);
-        assert_eq!(at(&grid, 1.05, 0.05 - dy / 2.0), Cell::Free);
-        assert_eq!(grid.counts().0, 2);
-    }
-
-    #[test]
-    fn a_hit_wins_over_a_pass_through_of_the_same_scan() {
-        // 180 beams from (0.05, 0.05): beam 90 (0°) reads 3 m and runs along row 0; beam 91 (1°)
-        // reads 1 m and ends at (1.0498, 0.0675), in cell (10, 0), which beam 90 crosses.
-        // One scan: that cell gets the hit (+0.847, p = 0.7 > 0.65) and not the miss
-        // (which would leave +0.44, p = 0.61: unknown).
-        let mut ranges = vec![NO_RETURN; 180];
-        ranges[90] = 3.0;
-        ranges[91] = 1.0;
-        let (grid, _) = build(&log_of(&[(Pose::new(0.05, 0.05, 0.0), ranges)]), None);
-        let end = (
-            0.05 + 1f64.to_radians().cos(),
-            0.05 + 1f64.to_radians().sin(),
-        );
-        assert_eq!(
-            grid.geometry().cell_of(end.0, end.1),
-            grid.geometry().cell_of(1.05, 0.05)
-        );
-        assert_eq!(at(&grid, end.0, end.1), Cell::Occupied);
-    }
-
-    #[test]
-    fn bad_options_and_empty_logs_are_errors() {
-        let log = log_of(&[(Pose::default(), vec![1.0])]);
-        let mut o = MappingOptions::new(NO_RETURN);
-        o.resolution_m = 0.0;
-        assert_eq!(
-            build_from_log(&log, &o, |_, _| {}).err(),
-            Some(MappingError::BadOptions)
-        );
-        let o = MappingOptions::new(NO_RETURN);
-        assert_eq!(
-            build_from_log(&CarmenLog::default(), &o, |_, _| {}).err(),
-            Some(MappingError::NoData)
-        );
-        let mut o = MappingOptions::new(NO_RETURN);
-        o.resolution_m = 1e-6;
-        assert!(matches!(
-            build_from_log(&log, &o, |_, _| {}).err(),
-            Some(MappingError::TooLarge { .. })
-        ));
-    }
-}
+mod tests;

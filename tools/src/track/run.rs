@@ -1,98 +1,19 @@
 //! One run of the localizer over a loaded log, and its metrics.
 
-use crate::carmen::{CarmenLog, ReadOptions};
-use crate::score_cmd::MAX_BEAMS;
+use crate::cmd::scored_log::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
-use beamfield::gaussian::standard_normal_pair;
 use beamfield::mcl::{
     Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64,
 };
-use beamfield::{math, wrap_angle, BeamLayout, Pose, Reading, Scan, SensorMount, Tempered};
+use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, Tempered};
 use std::io::IsTerminal;
-use std::path::Path;
 
+use super::{synthesize_odometry, TrackInput};
 use super::{
     usage, Init, TrackError, Weighting, CONVERGED_DEG, CONVERGED_M, CONVERGED_SCANS,
     INIT_SIGMA_THETA_RAD, INIT_SIGMA_XY_M, KIDNAP_MIN_M, KIDNAP_SEED_XOR, LOST_M,
-    MAX_TRACK_PARTICLES, ODOMETRY_SEED_XOR,
+    MAX_TRACK_PARTICLES,
 };
-
-/// Everything a run needs, loaded once.
-pub struct TrackInput {
-    /// Blob bytes (and any free-space section after them).
-    pub bytes: Vec<u8>,
-    /// Likelihood-field parameters.
-    pub params: LikelihoodParams,
-    /// The log's beam layout (centred mount).
-    pub layout: BeamLayout<MAX_BEAMS>,
-    /// The scans' ranges (each made a [`Scan`] when it is scored: a `Scan<MAX_BEAMS>` holds
-    /// 4.3 KB whatever its beams, so a log of many short scans is not multiplied in memory).
-    pub scans: Vec<Vec<f32>>,
-    /// The logged (corrected) laser poses: the truth.
-    pub logged: Vec<Pose>,
-}
-
-impl TrackInput {
-    /// The field view and the free space after it, if any.
-    ///
-    /// # Errors
-    /// [`TrackError::Blob`], [`TrackError::FreeSpace`] (also when its grid is not the blob's).
-    pub fn views(&self) -> Result<(FieldView<'_>, Option<FreeSpace<'_>>), TrackError> {
-        let (view, rest) = FieldView::parse_prefix(&self.bytes).map_err(TrackError::Blob)?;
-        if rest.is_empty() {
-            return Ok((view, None));
-        }
-        let free = FreeSpace::parse(rest).map_err(TrackError::FreeSpace)?;
-        if !free.matches(&view) {
-            return Err(usage("the free-space section's grid is not the blob's"));
-        }
-        Ok((view, Some(free)))
-    }
-}
-
-/// Loads the field and the log.
-///
-/// # Errors
-/// [`TrackError`] for unreadable or malformed inputs.
-pub fn load(
-    field: &Path,
-    log: &Path,
-    z_hit: f32,
-    z_rand: f32,
-    sigma_hit: f32,
-) -> Result<TrackInput, TrackError> {
-    let bytes =
-        crate::limits::read_regular_file(field, crate::limits::MAX_FIELD_FILE_BYTES, "field file")
-            .map_err(TrackError::Read)?;
-    let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
-    let max_range = log
-        .max_range
-        .value_m()
-        .ok_or_else(|| usage("the log's max-range value could not be detected"))?;
-    let params = LikelihoodParams::new(z_hit, z_rand, sigma_hit, max_range)
-        .map_err(|e| usage(format!("likelihood field parameters: {e}")))?;
-    let layout = log
-        .layout_with_mount(SensorMount::CENTERED)
-        .map_err(|e| usage(format!("beam layout of the log: {e}")))?;
-    if let Some(s) = log.scans.first() {
-        // Every scan has the first one's beams (the reader enforces it).
-        s.to_scan::<MAX_BEAMS>()
-            .map_err(|e| usage(format!("scan: {e}")))?;
-    } else {
-        return Err(usage("no FLASER scans in the log"));
-    }
-    let logged = log.scans.iter().map(|s| s.pose).collect();
-    let scans = log.scans.into_iter().map(|s| s.ranges_m).collect();
-    let input = TrackInput {
-        bytes,
-        params,
-        layout,
-        scans,
-        logged,
-    };
-    input.views()?;
-    Ok(input)
-}
 
 /// The options of one run.
 #[derive(Clone, Copy, Debug)]
@@ -239,63 +160,6 @@ fn amcl_cube(
         p += pz * pz * pz;
     }
     p.ln()
-}
-
-/// The synthesized odometry of run seed `seed`: starting at the first logged pose, each step
-/// between consecutive logged poses is perturbed by `noise` (the variances of
-/// [`OdometryNoise::sigmas`], drawn by [`odometry_sample`] from [`SplitMix64`] seeded
-/// `seed ^ ODOMETRY_SEED_XOR`) and chained. One pose per logged pose
-/// (none for none). The filter sees the steps between consecutive odometry poses; the firmware's
-/// track asset (`fixtures/assets/track.rs`) is written from the same function.
-///
-/// # Errors
-/// [`TrackError::Usage`] for a logged pose that is not finite.
-pub fn synthesize_odometry(
-    noise: &OdometryNoise,
-    logged: &[Pose],
-    seed: u64,
-) -> Result<Vec<Pose>, TrackError> {
-    let mut odom_rng = SplitMix64::new(seed ^ ODOMETRY_SEED_XOR);
-    let mut out: Vec<Pose> = Vec::with_capacity(logged.len());
-    for (k, truth) in logged.iter().enumerate() {
-        let next = match (k.checked_sub(1).and_then(|j| logged.get(j)), out.last()) {
-            (Some(prev), Some(odom)) => {
-                let step = OdometryStep::between(prev, truth)
-                    .map_err(|e| usage(format!("logged pose {k}: {e}")))?;
-                odometry_sample(noise, odom, &step, &mut odom_rng)
-            }
-            _ => *truth,
-        };
-        out.push(next);
-    }
-    Ok(out)
-}
-
-/// One draw of the odometry model for the synthesized odometry: the model of
-/// [`OdometryNoise::sample`], with its normals from the Box–Muller transform
-/// ([`standard_normal_pair`], four `next_u32`: δrot1 and δtrans from the first pair, δrot2 from
-/// the first value of the second) rather than the filter's ziggurat, so that the data the
-/// filter is measured on does not come from the filter's own sampler. (The filter used
-/// Box–Muller until it moved to the ziggurat for speed; this keeps the synthesized odometry,
-/// and the firmware's track asset, as they were.)
-pub fn odometry_sample(
-    noise: &OdometryNoise,
-    pose: &Pose,
-    step: &OdometryStep,
-    rng: &mut SplitMix64,
-) -> Pose {
-    let (s_rot1, s_trans, s_rot2) = noise.sigmas(step);
-    let (n1, n2) = standard_normal_pair(rng);
-    let (n3, _) = standard_normal_pair(rng);
-    let rot1 = step.rot1_rad() - s_rot1 * n1;
-    let trans = step.trans_m() - s_trans * n2;
-    let rot2 = step.rot2_rad() - s_rot2 * n3;
-    let (s, c) = math::sin_cos(pose.theta_rad + rot1);
-    Pose {
-        x_m: pose.x_m + trans * c,
-        y_m: pose.y_m + trans * s,
-        theta_rad: wrap_angle(pose.theta_rad + rot1 + rot2),
-    }
 }
 
 /// Runs the filter over the log once.

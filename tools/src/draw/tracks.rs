@@ -1,20 +1,20 @@
 //! The track picture: trajectories over the rendered field.
 
-use super::{RunResult, TrackError, TrackInput};
-use crate::field_figure::field_image;
+use crate::draw::field_figure::field_image;
+use crate::track::{RunResult, TrackError, TrackInput};
 use beamfield::Pose;
 use std::path::Path;
 
 /// Draws the logged (blue) and estimated (green) trajectories over the rendered field, one pixel
 /// per cell, north up.
-pub(super) fn draw_track(
+pub fn draw_track(
     path: &Path,
     input: &TrackInput,
     r: &RunResult,
     scans: usize,
 ) -> Result<(), TrackError> {
     let (view, _) = input.views()?;
-    crate::field_figure::check_picture_size(view.width(), view.height())
+    crate::draw::field_figure::check_picture_size(view.width(), view.height())
         .map_err(|e| TrackError::Png(path.to_path_buf(), e.0))?;
     let base = field_image(&view);
     let scale = 1u32;

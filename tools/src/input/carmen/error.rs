@@ -149,7 +149,7 @@ pub enum LogError {
     Line(LineError),
     /// A `robot_frontlaser_offset` or given max range that is not finite, or a max range ≤ 0.
     BadOption(&'static str),
-    /// The log file is longer than [`crate::limits::MAX_LOG_BYTES`].
+    /// The log file is longer than [`crate::input::limits::MAX_LOG_BYTES`].
     TooLarge {
         /// The file.
         path: std::path::PathBuf,
@@ -173,7 +173,7 @@ impl fmt::Display for LogError {
                 f,
                 "{} is larger than {} bytes, the limit for a CARMEN log",
                 path.display(),
-                crate::limits::MAX_LOG_BYTES
+                crate::input::limits::MAX_LOG_BYTES
             ),
             Self::TooMany(what, limit) => {
                 write!(

@@ -1,6 +1,6 @@
 //! A labelled heat map of a square x–y grid of log-likelihoods (`beamfield score --grid`).
 
-use crate::plot::{register_fonts, PlotError};
+use crate::draw::plot::{register_fonts, PlotError};
 use plotters::prelude::*;
 use std::path::Path;
 

@@ -31,8 +31,8 @@ pub const MAX_LOG_BYTES: u64 = 256 << 20;
 pub const MAX_TEXT_FILE_BYTES: u64 = 1 << 20;
 
 /// Longest line of standard input `field query` reads: 64 KiB (a query line is a few dozen
-/// bytes), as the CARMEN reader's [`crate::carmen::MAX_LINE_BYTES`].
-pub const MAX_QUERY_LINE_BYTES: usize = crate::carmen::MAX_LINE_BYTES;
+/// bytes), as the CARMEN reader's [`crate::input::carmen::MAX_LINE_BYTES`].
+pub const MAX_QUERY_LINE_BYTES: usize = crate::input::carmen::MAX_LINE_BYTES;
 
 /// Characters of a bad input line (or token) quoted in an error message.
 pub const QUOTE_CHARS: usize = 64;

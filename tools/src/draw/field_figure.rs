@@ -1,7 +1,7 @@
 //! The picture `beamfield field render` writes: the field's cells (north up) with a title, axes
 //! in metres (map frame) and a scale bar.
 
-use crate::plot::{register_fonts, PlotError};
+use crate::draw::plot::{register_fonts, PlotError};
 use beamfield::field::FieldView;
 use plotters::element::BitMapElement;
 use plotters::prelude::*;

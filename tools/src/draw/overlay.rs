@@ -2,7 +2,7 @@
 //! where a scan's endpoints land on the map at the pose it is given, and at another pose
 //! (the grid's best), so a person can see which one lines up with the walls.
 
-use crate::plot::{register_fonts, PlotError};
+use crate::draw::plot::{register_fonts, PlotError};
 use beamfield::field::FieldView;
 use plotters::prelude::*;
 use std::path::Path;

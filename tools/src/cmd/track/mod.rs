@@ -1,0 +1,242 @@
+//! `beamfield track`: Monte Carlo localization over a whole CARMEN log against its logged poses
+//! (the runs themselves are [`crate::track`]): tracking error, global localization, kidnapping,
+//! over one or more seeds; a PNG of the tracks over the map.
+
+mod report;
+pub use report::{SeedRun, TrackReport};
+
+use crate::cmd::likelihood::LikelihoodArgs;
+use crate::cmd::scored_log::MAX_BEAMS;
+use crate::track::{
+    load, run_once, usage, Init, Metrics, RunOptions, TrackError, Weighting, MAX_TRACK_PARTICLES,
+    MAX_TRACK_SEEDS,
+};
+use clap::Args;
+use std::path::PathBuf;
+
+/// `beamfield track`: run the localizer over a log.
+#[derive(Args, Debug, Clone)]
+pub struct TrackArgs {
+    /// The distance-field blob (`beamfield field build`); `--init global` and recovery need it
+    /// built with `--free-space`.
+    #[arg(long)]
+    pub field: PathBuf,
+    /// The CARMEN log (FLASER lines with corrected poses).
+    #[arg(long)]
+    pub log: PathBuf,
+    /// Number of particles (1 to 20,000).
+    #[arg(long, default_value_t = 500,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_TRACK_PARTICLES as u64))]
+    pub particles: usize,
+    /// Tempering κ (8.25 is the value `beamfield calibrate` finds on the Intel log).
+    #[arg(long, default_value_t = 8.25)]
+    pub kappa: f32,
+    /// Score every S-th beam (1 to 1081, the most beams a scan has here).
+    #[arg(long, default_value_t = 1,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new()
+              .range(1..=MAX_BEAMS as u64))]
+    pub stride: usize,
+    /// Odometry noise odom_alpha1..4 (variance coefficients, AMCL's convention), used both to
+    /// synthesize the odometry and in the filter: "A" or "A1,A2,A3,A4".
+    #[arg(long = "odom-noise", default_value = "0.005")]
+    pub odom_noise: String,
+    /// Seed of the run (see the module docs for the generators).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Run this many seeds (SEED, SEED+1, …; 1 to 1,000) and report min / median / max.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=MAX_TRACK_SEEDS))]
+    pub seeds: u64,
+    /// Initial cloud.
+    #[arg(long, value_enum, default_value_t = Init::Logged)]
+    pub init: Init,
+    /// At this scan, move the filter's whole cloud rigidly to a random free pose at least
+    /// 3 m from the truth (equivalent to kidnapping the robot), and count scans until it
+    /// recovers.
+    #[arg(long)]
+    pub kidnap: Option<usize>,
+    /// Particle weighting.
+    #[arg(long, value_enum, default_value_t = Weighting::Product)]
+    pub weighting: Weighting,
+    /// Augmented-MCL recovery rates "SLOW,FAST" (recovery_alpha_slow/fast, e.g. "0.001,0.1";
+    /// the default "0,0" turns it off, as AMCL's defaults do).
+    #[arg(long, default_value = "0,0")]
+    pub recovery: String,
+    /// Inject recovery particles only while the filter has not settled; settled: its
+    /// estimate's spread under 15 cm and 0.1 rad, and its moves matching the odometry's within
+    /// 15 cm and 0.1 rad, for 20 scans in a row (the filter's own view, not the logged poses).
+    /// A guard against recovery hijacking a tracked cloud.
+    #[arg(long = "recovery-while-unsettled")]
+    pub recovery_while_unsettled: bool,
+    /// Retry "DROP,SCALE" (off by default; MclConfig::with_retry): when an update's average
+    /// likelihood per beam falls more than DROP nats below its recent level, resample, move the
+    /// set by SCALE times the odometry step's spread and weigh it again by the same scan. DROP
+    /// "-inf" retries at every update (a second scoring pass each time), e.g. "--retry=-inf,0.5".
+    #[arg(long, allow_hyphen_values = true)]
+    pub retry: Option<String>,
+    /// Resample when the effective sample size falls below this fraction of the particles.
+    #[arg(long = "resample-ess", default_value_t = 0.5)]
+    pub resample_ess: f32,
+    /// The likelihood field's mixture.
+    #[command(flatten)]
+    pub likelihood: LikelihoodArgs,
+    /// Stop after this many scans (default: the whole log).
+    #[arg(long)]
+    pub scans: Option<usize>,
+    /// Draw the estimated (green) and logged (blue) trajectories over the map (first seed).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+}
+
+fn parse_list(text: &str, what: &str, n: usize) -> Result<Vec<f32>, TrackError> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            usage(format!(
+                "{what} {text:?}: expected numbers separated by commas"
+            ))
+        })?;
+    match v.len() {
+        1 if n == 4 => Ok(vec![v[0]; 4]),
+        k if k == n => Ok(v),
+        _ => Err(usage(format!("{what} {text:?}: expected {n} numbers"))),
+    }
+}
+
+/// The options of `args` for seed `seed`.
+///
+/// # Errors
+/// [`TrackError::Usage`] for malformed lists.
+pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, TrackError> {
+    let a = parse_list(&args.odom_noise, "--odom-noise", 4)?;
+    let r = parse_list(&args.recovery, "--recovery", 2)?;
+    let retry = match &args.retry {
+        Some(text) => {
+            let v = parse_list(text, "--retry", 2)?;
+            Some((v[0], v[1]))
+        }
+        None => None,
+    };
+    Ok(RunOptions {
+        particles: args.particles,
+        kappa: args.kappa,
+        stride: args.stride,
+        alphas: [a[0], a[1], a[2], a[3]],
+        seed,
+        init: args.init,
+        kidnap: args.kidnap,
+        weighting: args.weighting,
+        recovery: (r[0], r[1]),
+        recovery_while_unsettled: args.recovery_while_unsettled,
+        retry,
+        resample_ess: args.resample_ess,
+        scans: args.scans.unwrap_or(scans).min(scans),
+    })
+}
+
+fn min_med_max(mut v: Vec<f64>) -> [f64; 3] {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        return [f64::NAN; 3];
+    }
+    let mid = if v.len() % 2 == 1 {
+        v[v.len() / 2]
+    } else {
+        0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2])
+    };
+    [v[0], mid, v[v.len() - 1]]
+}
+
+/// Runs `beamfield track`.
+///
+/// # Errors
+/// [`TrackError`].
+pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
+    let input = load(
+        &args.field,
+        &args.log,
+        args.likelihood.z_hit,
+        args.likelihood.z_rand,
+        args.likelihood.sigma_hit,
+    )?;
+    if !(1..=MAX_TRACK_SEEDS).contains(&args.seeds) {
+        return Err(usage(format!(
+            "--seeds {}: must be 1 ..= {MAX_TRACK_SEEDS}",
+            args.seeds
+        )));
+    }
+    if let Some(k) = args.kidnap {
+        if k == 0 || k >= input.scans.len() {
+            return Err(usage(format!(
+                "--kidnap {k}: must be a scan in 1..{}",
+                input.scans.len()
+            )));
+        }
+    }
+    let from = args.kidnap.unwrap_or(0);
+    let mut runs = Vec::new();
+    // SEED, SEED+1, … wrapping past u64::MAX (the seed is only a generator's state).
+    for seed in (0..args.seeds).map(|i| args.seed.wrapping_add(i)) {
+        let o = options(args, seed, input.scans.len())?;
+        let r = run_once(&input, &o)?;
+        if runs.is_empty() {
+            if let Some(path) = &args.output {
+                crate::draw::tracks::draw_track(path, &input, &r, o.scans)?;
+            }
+        }
+        runs.push((seed, r.metrics(from), r));
+    }
+    let o = options(args, args.seed, input.scans.len())?;
+    let pick = |f: fn(&Metrics) -> f64| min_med_max(runs.iter().map(|(_, m, _)| f(m)).collect());
+    let rmse = pick(|m| m.trans_rmse_m * 100.0);
+    let head = pick(|m| m.heading_rmse_deg);
+    let maxe = pick(|m| m.max_trans_m);
+    let within = pick(|m| m.within_10cm_2deg * 100.0);
+    let lost = runs.iter().filter(|(_, m, _)| m.lost).count();
+    let lost_after = runs
+        .iter()
+        .filter(|(_, m, _)| m.lost_after_convergence)
+        .count();
+    let conv: Vec<Option<usize>> = runs.iter().map(|(_, m, _)| m.converged_after).collect();
+    let conv_ok: Vec<f64> = conv.iter().flatten().map(|&c| c as f64).collect();
+    let per = runs
+        .iter()
+        .map(|(seed, m, r)| SeedRun {
+            seed: *seed,
+            metrics: *m,
+            skipped: r.skipped,
+            resamplings: r.resamplings,
+            injected: r.injected,
+            retries: r.retries,
+        })
+        .collect();
+    Ok(TrackReport {
+        scans: o.scans,
+        particles: o.particles,
+        kappa: o.kappa,
+        stride: o.stride,
+        odom_alphas: o.alphas,
+        init: format!("{:?}", o.init).to_lowercase(),
+        weighting: format!("{:?}", o.weighting),
+        recovery: [o.recovery.0, o.recovery.1],
+        recovery_while_unsettled: o.recovery_while_unsettled,
+        retry: o.retry.map(|(d, k)| [d, k]),
+        kidnap: o.kidnap,
+        runs: per,
+        trans_rmse_cm_min_med_max: rmse,
+        heading_rmse_deg_min_med_max: head,
+        max_trans_m_min_med_max: maxe,
+        within_10cm_2deg_pct_min_med_max: within,
+        lost_runs: lost,
+        lost_after_convergence_runs: lost_after,
+        converged_runs: conv_ok.len(),
+        converged_after_min_med_max: if conv_ok.is_empty() {
+            None
+        } else {
+            Some(min_med_max(conv_ok))
+        },
+        options: o,
+        output: args.output.as_ref().map(|p| p.display().to_string()),
+    })
+}

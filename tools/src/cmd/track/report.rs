@@ -1,0 +1,171 @@
+//! What `beamfield track` reports over its seeds ([`TrackReport`]), as text and JSON.
+
+use crate::track::{Metrics, RunOptions};
+use serde::Serialize;
+use std::fmt;
+
+/// One seed's run, as reported.
+#[derive(Debug, Serialize)]
+pub struct SeedRun {
+    /// The seed.
+    pub seed: u64,
+    /// Its summary figures.
+    pub metrics: Metrics,
+    /// Scans skipped or discarded.
+    pub skipped: usize,
+    /// Resamplings.
+    pub resamplings: usize,
+    /// Recovery particles injected.
+    pub injected: u64,
+    /// Retries.
+    pub retries: usize,
+}
+
+/// What `beamfield track` found over its seeds.
+#[derive(Debug, Serialize)]
+pub struct TrackReport {
+    /// Scans run.
+    pub scans: usize,
+    /// Particles.
+    pub particles: usize,
+    /// κ.
+    pub kappa: f32,
+    /// Beam stride.
+    pub stride: usize,
+    /// odom_alpha1..4.
+    pub odom_alphas: [f32; 4],
+    /// `logged` or `global`.
+    pub init: String,
+    /// The weighting (`Product` or `AmclCube`).
+    pub weighting: String,
+    /// Recovery rates (slow, fast).
+    pub recovery: [f32; 2],
+    /// Recovery only while unsettled.
+    pub recovery_while_unsettled: bool,
+    /// The retry (drop, scale).
+    pub retry: Option<[f32; 2]>,
+    /// The kidnapping's scan.
+    pub kidnap: Option<usize>,
+    /// Every seed's run.
+    pub runs: Vec<SeedRun>,
+    /// Translation RMSE over the seeds, cm: min, median, max.
+    pub trans_rmse_cm_min_med_max: [f64; 3],
+    /// Heading RMSE, degrees: min, median, max.
+    pub heading_rmse_deg_min_med_max: [f64; 3],
+    /// Largest translation error, metres: min, median, max.
+    pub max_trans_m_min_med_max: [f64; 3],
+    /// Share of scans within 10 cm and 2°, %: min, median, max.
+    pub within_10cm_2deg_pct_min_med_max: [f64; 3],
+    /// Runs that were lost.
+    pub lost_runs: usize,
+    /// Runs lost after converging.
+    pub lost_after_convergence_runs: usize,
+    /// Runs that converged.
+    pub converged_runs: usize,
+    /// Scans to convergence over the runs that converged: min, median, max.
+    pub converged_after_min_med_max: Option<[f64; 3]>,
+    /// The options of the first seed's run.
+    #[serde(skip)]
+    pub options: RunOptions,
+    /// The picture written (`--output`).
+    #[serde(skip)]
+    pub output: Option<String>,
+}
+
+impl fmt::Display for TrackReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let o = &self.options;
+        let (rmse, head, maxe, within) = (
+            self.trans_rmse_cm_min_med_max,
+            self.heading_rmse_deg_min_med_max,
+            self.max_trans_m_min_med_max,
+            self.within_10cm_2deg_pct_min_med_max,
+        );
+        let (lost, lost_after, n) = (
+            self.lost_runs,
+            self.lost_after_convergence_runs,
+            self.runs.len(),
+        );
+        writeln!(
+            f,
+            "{} scans, {} particles, κ {}, stride {}, odom_alpha {:?}, init {:?}, weighting {:?}, \
+             recovery {:?}{}{}{}",
+            o.scans,
+            o.particles,
+            o.kappa,
+            o.stride,
+            o.alphas,
+            o.init,
+            o.weighting,
+            o.recovery,
+            if o.recovery_while_unsettled {
+                " while unsettled"
+            } else {
+                ""
+            },
+            o.retry
+                .map(|(d, k)| format!(", retry {d} nats below the level, {k}× the step's spread"))
+                .unwrap_or_default(),
+            o.kidnap
+                .map(|k| format!(", kidnapped at scan {k}"))
+                .unwrap_or_default()
+        )?;
+        for r in &self.runs {
+            let m = &r.metrics;
+            writeln!(
+                f,
+                "seed {}: trans RMSE {:.2} cm, heading RMSE {:.2}°, max {:.3} m, within 10 cm/2° \
+                 {:.1} %, {}{}{}; {} resamplings, {} injected, {} retries, {} skipped",
+                r.seed,
+                m.trans_rmse_m * 100.0,
+                m.heading_rmse_deg,
+                m.max_trans_m,
+                m.within_10cm_2deg * 100.0,
+                if m.lost { "LOST" } else { "not lost" },
+                m.converged_after
+                    .map(|c| format!(", converged after {c} scans"))
+                    .unwrap_or_else(|| ", never converged".into()),
+                if m.lost_after_convergence {
+                    ", LOST after converging"
+                } else {
+                    ""
+                },
+                r.resamplings,
+                r.injected,
+                r.retries,
+                r.skipped,
+            )?;
+        }
+        write!(
+            f,
+            "over {n} seeds (min / median / max): trans RMSE {:.2} / {:.2} / {:.2} cm; heading RMSE \
+             {:.2} / {:.2} / {:.2}°; max error {:.3} / {:.3} / {:.3} m; within 10 cm/2° {:.1} / \
+             {:.1} / {:.1} %; lost (> 0.5 m) in {lost} of {n}; converged (20 cm/5° for 20 scans) in \
+             {} of {n}",
+            rmse[0],
+            rmse[1],
+            rmse[2],
+            head[0],
+            head[1],
+            head[2],
+            maxe[0],
+            maxe[1],
+            maxe[2],
+            within[0],
+            within[1],
+            within[2],
+            self.converged_runs,
+        )?;
+        if let Some(c) = self.converged_after_min_med_max {
+            write!(
+                f,
+                ", after {:.0} / {:.0} / {:.0} scans; lost after converging in {lost_after} of {}",
+                c[0], c[1], c[2], self.converged_runs
+            )?;
+        }
+        if let Some(p) = &self.output {
+            write!(f, "\nwrote {p}")?;
+        }
+        Ok(())
+    }
+}

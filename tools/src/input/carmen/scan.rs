@@ -1,0 +1,73 @@
+//! One FLASER message ([`LaserScan`]): its ranges, poses and timestamps, and its beams as a
+//! [`beamfield::Scan`] and [`beamfield::BeamLayout`]; the f64 pose and the CARMEN bearing.
+
+use beamfield::{Pose, Scan, ScanError};
+
+/// One FLASER message.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LaserScan {
+    /// The ranges as written, metres, in beam order (beam `i` at `−90° + i·180°/n`). Max-range
+    /// readings keep their sentinel value; [`beamfield::Reading::classify`] against the log's
+    /// max range tells them apart.
+    pub ranges_m: Vec<f32>,
+    /// The laser's pose in the world frame (`x y theta`), metres and radians, θ as written.
+    pub pose: Pose,
+    /// The robot's pose (`odom_x odom_y odom_theta`), metres and radians.
+    pub odom_pose: Pose,
+    /// The laser's pose as parsed, in f64 ([`LaserScan::pose`] is it rounded to f32): what the
+    /// map builder projects beams from, so that a log far from the origin keeps its precision.
+    pub pose_f64: PoseF64,
+    /// The ipc timestamp, seconds. Not necessarily increasing (the Intel log steps back 4 times).
+    pub timestamp_s: f64,
+    /// The logger timestamp, seconds.
+    pub logger_timestamp_s: f64,
+    /// 1-based line number in the log.
+    pub line: usize,
+}
+
+impl LaserScan {
+    /// The ranges as a fixed-capacity [`Scan`] for the `beamfield` models.
+    ///
+    /// # Errors
+    /// [`ScanError::TooMany`] when the scan has more than `N` readings (nothing is truncated).
+    pub fn to_scan<const N: usize>(&self) -> Result<Scan<N>, ScanError> {
+        Scan::from_ranges(&self.ranges_m)
+    }
+
+    /// World-frame end point of beam `i` (metres), in f64 from the f64 pose
+    /// ([`LaserScan::pose_f64`]), or `None` past the last beam. Uses the CARMEN bearing
+    /// `−π/2 + i·π/n`; max-range readings are projected like any other.
+    pub fn endpoint(&self, i: usize) -> Option<(f64, f64)> {
+        let n = self.ranges_m.len();
+        let r = f64::from(*self.ranges_m.get(i)?);
+        let p = self.pose_f64;
+        let a = p.theta_rad + carmen_bearing_rad(i, n);
+        Some((p.x_m + r * a.cos(), p.y_m + r * a.sin()))
+    }
+}
+
+/// A pose in f64 (metres, metres, radians).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PoseF64 {
+    /// x, metres.
+    pub x_m: f64,
+    /// y, metres.
+    pub y_m: f64,
+    /// θ, radians.
+    pub theta_rad: f64,
+}
+
+impl From<Pose> for PoseF64 {
+    fn from(p: Pose) -> Self {
+        Self {
+            x_m: f64::from(p.x_m),
+            y_m: f64::from(p.y_m),
+            theta_rad: f64::from(p.theta_rad),
+        }
+    }
+}
+
+/// Bearing of beam `i` of `n` in a FLASER scan, radians: `−π/2 + i·π/n`, in f64.
+pub fn carmen_bearing_rad(i: usize, n: usize) -> f64 {
+    -std::f64::consts::FRAC_PI_2 + i as f64 * std::f64::consts::PI / n.max(1) as f64
+}

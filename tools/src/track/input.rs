@@ -1,0 +1,89 @@
+//! What a run of the localizer needs, loaded once: the field and its free space, the log's
+//! scans, layout and logged poses, and the likelihood field.
+
+use super::{usage, TrackError};
+use crate::cmd::scored_log::MAX_BEAMS;
+use crate::input::carmen::{CarmenLog, ReadOptions};
+use beamfield::field::{FieldView, FreeSpace, LikelihoodParams};
+use beamfield::{BeamLayout, Pose, SensorMount};
+use std::path::Path;
+
+/// Everything a run needs, loaded once.
+pub struct TrackInput {
+    /// Blob bytes (and any free-space section after them).
+    pub bytes: Vec<u8>,
+    /// Likelihood-field parameters.
+    pub params: LikelihoodParams,
+    /// The log's beam layout (centred mount).
+    pub layout: BeamLayout<MAX_BEAMS>,
+    /// The scans' ranges (each made a [`Scan`](beamfield::Scan) when it is scored: a `Scan<MAX_BEAMS>` holds
+    /// 4.3 KB whatever its beams, so a log of many short scans is not multiplied in memory).
+    pub scans: Vec<Vec<f32>>,
+    /// The logged (corrected) laser poses: the truth.
+    pub logged: Vec<Pose>,
+}
+
+impl TrackInput {
+    /// The field view and the free space after it, if any.
+    ///
+    /// # Errors
+    /// [`TrackError::Blob`], [`TrackError::FreeSpace`] (also when its grid is not the blob's).
+    pub fn views(&self) -> Result<(FieldView<'_>, Option<FreeSpace<'_>>), TrackError> {
+        let (view, rest) = FieldView::parse_prefix(&self.bytes).map_err(TrackError::Blob)?;
+        if rest.is_empty() {
+            return Ok((view, None));
+        }
+        let free = FreeSpace::parse(rest).map_err(TrackError::FreeSpace)?;
+        if !free.matches(&view) {
+            return Err(usage("the free-space section's grid is not the blob's"));
+        }
+        Ok((view, Some(free)))
+    }
+}
+
+/// Loads the field and the log.
+///
+/// # Errors
+/// [`TrackError`] for unreadable or malformed inputs.
+pub fn load(
+    field: &Path,
+    log: &Path,
+    z_hit: f32,
+    z_rand: f32,
+    sigma_hit: f32,
+) -> Result<TrackInput, TrackError> {
+    let bytes = crate::input::limits::read_regular_file(
+        field,
+        crate::input::limits::MAX_FIELD_FILE_BYTES,
+        "field file",
+    )
+    .map_err(TrackError::Read)?;
+    let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
+    let max_range = log
+        .max_range
+        .value_m()
+        .ok_or_else(|| usage("the log's max-range value could not be detected"))?;
+    let params = LikelihoodParams::new(z_hit, z_rand, sigma_hit, max_range)
+        .map_err(|e| usage(format!("likelihood field parameters: {e}")))?;
+    let layout = log
+        .layout_with_mount(SensorMount::CENTERED)
+        .map_err(|e| usage(format!("beam layout of the log: {e}")))?;
+    if let Some(s) = log.scans.first() {
+        // Every scan has the first one's beams (the reader enforces it).
+        s.to_scan::<MAX_BEAMS>()
+            .map_err(|e| usage(format!("scan: {e}")))?;
+    } else {
+        return Err(usage("no FLASER scans in the log"));
+    }
+    let logged = log.scans.iter().map(|s| s.pose).collect();
+    let scans = log.scans.into_iter().map(|s| s.ranges_m).collect();
+    let input = TrackInput {
+        bytes,
+        params,
+        layout,
+        scans,
+        logged,
+    };
+    input.views()?;
+    Ok(input)
+}
