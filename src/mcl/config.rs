@@ -89,9 +89,10 @@ pub struct MclConfig {
 
 impl MclConfig {
     /// - `noise`: the odometry motion model's `odom_alpha1..4`;
-    /// - `resample_ess_fraction` in `[0, 1]`: resample when the effective sample size falls
-    ///   below this fraction of the particle count (1 resamples at every update but a perfectly
-    ///   even one; 0.5 is the usual choice);
+    /// - `resample_ess_fraction` `f` in `[0, 1]`: resample when the effective sample size falls
+    ///   below this fraction of its range `[1, n]` (`ess − 1 < f·(n − 1)`, `n` the particles in
+    ///   use; 1 resamples at every update but a perfectly even one, 0 never; 0.5 is the usual
+    ///   choice). A set with an impossible particle (weight 0) is resampled whatever `f`;
     /// - `recovery_alpha_slow`, `recovery_alpha_fast` in `[0, 1]` (Thrun Table 8.3, AMCL's
     ///   `recovery_alpha_slow/fast`): the decay rates of the long- and short-term averages of
     ///   the measurement likelihood; `0 ≤ slow < fast`, or both 0 to turn recovery off.

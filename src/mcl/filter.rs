@@ -29,6 +29,9 @@ struct Reweighted {
     sum: f32,
     /// The estimate, with the ESS.
     estimate: Estimate,
+    /// Some particle scored `−∞` (an impossible pose, a NaN score, a NaN or infinite
+    /// particle): its weight is 0.
+    impossible: bool,
 }
 
 /// Monte Carlo localization over caller-placed [`Particles`].
@@ -383,7 +386,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         } else {
             0
         };
-        let due = rw.estimate.ess < self.config.resample_ess_fraction * n as f32 || m > 0;
+        let due = self.resampling_due(rw.estimate.ess, rw.impossible) || m > 0;
         let mut injected = 0u16;
         if due {
             injected = self.resample(m, rw.sum, free, rng);
@@ -434,7 +437,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
         let mut near = Moments::new(&center, ESTIMATE_RADIUS_M, ESTIMATE_HALF_ANGLE_RAD);
         // S = Σ e^{v − max} ∈ [1, n]: the best particle contributes exactly 1.
         let (mut sum, mut sum_sq) = (0.0f32, 0.0f32);
+        let mut impossible = false;
         for (p, w) in poses.iter().zip(weights.iter_mut()).take(n) {
+            impossible |= *w == f32::NEG_INFINITY;
             let e = exp_nonpositive(*w - max);
             *w = e;
             sum += e;
@@ -450,7 +455,20 @@ impl<'p, const N: usize> Mcl<'p, N> {
             ln_total: max + math::ln(sum) + ln_uniform,
             sum,
             estimate,
+            impossible,
         })
+    }
+
+    /// Whether the set is resampled at this update (recovery aside): when the effective sample
+    /// size `ess` falls below the configured fraction of the way from a degenerate set (ESS 1)
+    /// to an even one (ESS `n`), `ess − 1 < f·(n − 1)`, or when some particle is impossible
+    /// (it must not stay in the set). The ESS of a set is never below 1, so the plain
+    /// `ess < f·n` could never fire for `f·n ≤ 1` (2 particles at `f` = 0.5); for hundreds
+    /// of particles the two differ by half a particle.
+    fn resampling_due(&self, ess: f32, impossible: bool) -> bool {
+        let n = self.len as f32;
+        let f = self.config.resample_ess_fraction;
+        impossible || (f > 0.0 && ess - 1.0 < f * (n - 1.0))
     }
 
     fn reset_weights_only(&mut self) {
@@ -552,8 +570,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
 }
 
 /// Pass 1 of [`Mcl::reweight`]: `wᵢ ← ln p(z | xᵢ)` (plus `ln wᵢ` when `PRIOR`) for the first
-/// `n` particles, a NaN log-likelihood counting as `−∞` and `+∞` clamped to `f32::MAX`; returns
-/// the largest and its index (the first on ties).
+/// `n` particles, a NaN log-likelihood and a particle with a NaN or infinite coordinate
+/// counting as `−∞` and `+∞` clamped to `f32::MAX`; returns the largest and its index (the
+/// first on ties).
 #[inline]
 fn log_weights<const PRIOR: bool, F: FnMut(&Pose) -> f32>(
     poses: &[Pose],
@@ -564,7 +583,13 @@ fn log_weights<const PRIOR: bool, F: FnMut(&Pose) -> f32>(
     let mut max = f32::NEG_INFINITY;
     let mut best = 0usize;
     for (i, (p, w)) in poses.iter().zip(weights.iter_mut()).take(n).enumerate() {
-        let l = log_likelihood(p);
+        // A particle with a NaN or infinite coordinate is nowhere: impossible, whatever the
+        // scorer would say (it is not asked).
+        let l = if p.is_finite() {
+            log_likelihood(p)
+        } else {
+            f32::NAN
+        };
         let l = if l <= f32::MAX {
             l
         } else if l.is_nan() {

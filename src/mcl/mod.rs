@@ -32,5 +32,8 @@ pub mod rng;
 pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
 pub use estimate::Estimate;
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
-pub use motion::{MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M};
+pub use motion::{
+    MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M, MAX_ALPHA, MAX_STEP_M,
+    MAX_STEP_ROTATION_RAD,
+};
 pub use rng::{SplitMix64, XorShift64};
