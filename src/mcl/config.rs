@@ -2,6 +2,7 @@
 
 use super::estimate::Estimate;
 use super::motion::OdometryNoise;
+use super::quality::{QualityReport, QualityThresholds, Resetting};
 use crate::pose::Pose;
 
 /// Largest particle capacity: the resampling scratch holds one `u16` count per particle.
@@ -85,6 +86,10 @@ pub struct MclConfig {
     pub(super) retry_drop_nats: f32,
     /// Retry scale of the last odometry step's spread.
     pub(super) retry_scale: f32,
+    /// The quality signal's thresholds.
+    pub(super) quality: QualityThresholds,
+    /// Expansion and free-space resetting, the settle guard; None: off.
+    pub(super) resetting: Option<Resetting>,
 }
 
 impl MclConfig {
@@ -122,7 +127,45 @@ impl MclConfig {
             recovery_alpha_fast,
             retry_drop_nats: f32::INFINITY,
             retry_scale: 1.0,
+            quality: QualityThresholds::DEFAULT,
+            resetting: None,
         })
+    }
+
+    /// The quality signal's thresholds ([`QualityThresholds::DEFAULT`] unless given).
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`QualityThresholds::validate`] refuses them.
+    pub fn with_quality(self, thresholds: QualityThresholds) -> Result<Self, MclError> {
+        if !thresholds.validate() {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self {
+            quality: thresholds,
+            ..self
+        })
+    }
+
+    /// The quality signal's thresholds.
+    pub fn quality(&self) -> &QualityThresholds {
+        &self.quality
+    }
+
+    /// Turns on expansion and free-space resetting and the settle guard ([`Resetting`]; off by
+    /// default, [`Resetting::DEFAULT`] for the documented values); `None` turns them off.
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`Resetting::validate`] refuses the values.
+    pub fn with_resetting(self, resetting: Option<Resetting>) -> Result<Self, MclError> {
+        if resetting.is_some_and(|r| !r.validate()) {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self { resetting, ..self })
+    }
+
+    /// The resetting, when on ([`MclConfig::with_resetting`]).
+    pub fn resetting(&self) -> Option<&Resetting> {
+        self.resetting.as_ref()
     }
 
     /// Turns on the retry (off by default): a second proposal within an update. When an
@@ -190,4 +233,13 @@ pub struct Update {
     /// True when the retry ([`MclConfig::with_retry`]) moved and reweighted the set
     /// at this update (`ln_avg_likelihood` is the first weighing's).
     pub retried: bool,
+    /// The quality signal of this update (from the first weighing, before any retry or
+    /// expansion).
+    pub quality: QualityReport,
+    /// True when expansion resetting ([`MclConfig::with_resetting`]) widened the cloud and
+    /// reweighted it at this update.
+    pub expanded: bool,
+    /// True when this update's resampling was a free-space reset (the particles replaced are
+    /// counted in `injected`).
+    pub reset: bool,
 }

@@ -4,6 +4,7 @@
 use super::config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
 use super::estimate::{Estimate, Moments};
 use super::motion::{sample_words, OdometryStep};
+use super::quality::{Quality, QualityReport, QualityState};
 use super::resample::{apply_counts, low_variance_counts_of_total};
 use crate::field::FreeSpace;
 use crate::gaussian::{standard_normal_pair, uniform_f32};
@@ -32,6 +33,8 @@ struct Reweighted {
     /// Some particle scored `−∞` (an impossible pose, a NaN score, a NaN or infinite
     /// particle): its weight is 0.
     impossible: bool,
+    /// The share of the weight near the estimate's centre (0 to 1).
+    concentration: f32,
 }
 
 /// Monte Carlo localization over caller-placed [`Particles`].
@@ -70,6 +73,12 @@ pub struct Mcl<'p, const N: usize> {
     /// The last odometry step's spread for the retry: σ in x and y (metres) and in heading.
     retry_sigma_xy_m: f32,
     retry_sigma_theta_rad: f32,
+    /// The quality signal's averages and its last report.
+    quality_state: QualityState,
+    quality: QualityReport,
+    /// Expansion resets in a row; updates in a row reported `Tracking`.
+    expansions: u16,
+    tracking_streak: u16,
 }
 
 impl<'p, const N: usize> Mcl<'p, N> {
@@ -96,6 +105,10 @@ impl<'p, const N: usize> Mcl<'p, N> {
             ln_level: f32::NEG_INFINITY,
             retry_sigma_xy_m: 0.0,
             retry_sigma_theta_rad: 0.0,
+            quality_state: QualityState::NEW,
+            quality: QualityReport::default(),
+            expansions: 0,
+            tracking_streak: 0,
         })
     }
 
@@ -121,6 +134,10 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.ln_w_slow = f32::NEG_INFINITY;
         self.ln_w_fast = f32::NEG_INFINITY;
         self.ln_level = f32::NEG_INFINITY;
+        self.quality_state = QualityState::NEW;
+        self.quality = QualityReport::default();
+        self.expansions = 0;
+        self.tracking_streak = 0;
         self.estimate = Estimate::of(self.poses(), self.weights());
     }
 
@@ -201,6 +218,12 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// The latest estimate (of the initial set, before any update).
     pub fn estimate(&self) -> &Estimate {
         &self.estimate
+    }
+
+    /// The quality signal of the last update ([`QualityReport`]; the default, `Uncertain`
+    /// with NaN statistics, before the first update after an initialization).
+    pub fn quality(&self) -> &QualityReport {
+        &self.quality
     }
 
     /// The configuration.
@@ -293,8 +316,22 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if scan.prepared().is_empty() {
             return Err(MclError::EmptyScan);
         }
-        let per_beam = 1.0 / scan.prepared().len() as f32;
-        self.update_scaled(|p| scan.score(p).log_likelihood, per_beam, free, rng)
+        let prepared = scan.prepared();
+        let per_beam = 1.0 / prepared.len() as f32;
+        // The quality signal's explained share: one pass over the beams at the estimate.
+        let near_m = self.config.quality.explained_sigmas * prepared.field().params().sigma_hit_m();
+        let explain = |p: &Pose| {
+            let mut explained = 0u32;
+            prepared.score_with(p, |_, d| explained += u32::from(d <= near_m));
+            Some(explained as f32 * per_beam)
+        };
+        self.update_scaled(
+            |p| scan.score(p).log_likelihood,
+            per_beam,
+            explain,
+            free,
+            rng,
+        )
     }
 
     /// Reweights by any [`SensorModel`] (e.g. a [`crate::Tempered`] beam model) and finishes the
@@ -341,13 +378,15 @@ impl<'p, const N: usize> Mcl<'p, N> {
         free: Option<&FreeSpace<'_>>,
         rng: &mut R,
     ) -> Result<Update, MclError> {
-        self.update_scaled(log_likelihood, 1.0, free, rng)
+        self.update_scaled(log_likelihood, 1.0, |_| None, free, rng)
     }
 
-    fn update_scaled<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
+    #[allow(clippy::too_many_lines)]
+    fn update_scaled<F: FnMut(&Pose) -> f32, E: FnMut(&Pose) -> Option<f32>, R: Rng + ?Sized>(
         &mut self,
         mut log_likelihood: F,
         recovery_scale: f32,
+        mut explain: E,
         free: Option<&FreeSpace<'_>>,
         rng: &mut R,
     ) -> Result<Update, MclError> {
@@ -355,30 +394,77 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if n == 0 {
             return Err(MclError::NotInitialized);
         }
-        // At most two weighings (the second after a retry), from one call site so that the
-        // score is inlined once.
-        let mut first_ln_avg = None;
+        // At most two weighings (the second after a retry or an expansion), from one call site
+        // so that the score is inlined once.
+        let mut first: Option<(f32, QualityReport)> = None;
         let mut retried = false;
+        let mut expanded = false;
         let rw = loop {
             let Some(rw) = self.reweight(&mut log_likelihood) else {
                 self.reset_weights_only();
                 return Err(MclError::AllImpossible);
             };
-            if first_ln_avg.is_none() {
+            if first.is_none() {
                 // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added, so the
                 // normalizer's total is the average likelihood itself.
-                first_ln_avg = Some(rw.ln_total);
-                if self.config.retry() && self.collapsed(rw.ln_total * recovery_scale) {
+                let ln_beam = rw.ln_total * recovery_scale;
+                let explained = explain(&rw.estimate.pose);
+                let report = self.quality_state.observe(
+                    &self.config.quality,
+                    ln_beam,
+                    explained,
+                    &rw.estimate.covariance,
+                    rw.concentration,
+                );
+                first = Some((rw.ln_total, report));
+                if self.config.retry() && self.collapsed(ln_beam) {
                     self.resample(0, rw.sum, None, rng);
                     self.spread(rng);
                     retried = true;
                     continue;
                 }
+                if let Some(r) = self.config.resetting {
+                    let lost = match explained {
+                        Some(e) => e < r.expand_below,
+                        None => {
+                            report.ln_beam_slow - report.ln_beam_fast
+                                > self.config.quality.lost_drop_nats
+                        }
+                    };
+                    if lost {
+                        let k = self.expansions.min(u16::from(r.max_doublings));
+                        let grow = f32::from(1u16 << k.min(15));
+                        self.expansions = self.expansions.saturating_add(1);
+                        self.resample(0, rw.sum, None, rng);
+                        self.spread_by(grow * r.sigma_m, grow * r.sigma_rad, rng);
+                        expanded = true;
+                        continue;
+                    }
+                    self.expansions = 0;
+                }
             }
             break rw;
         };
-        let ln_avg = first_ln_avg.unwrap_or(rw.ln_total);
-        let random_fraction = self.track_likelihood(ln_avg * recovery_scale);
+        let (ln_avg, report) = first.unwrap_or((rw.ln_total, QualityReport::default()));
+        self.quality = report;
+        let mut random_fraction = self.track_likelihood(ln_avg * recovery_scale);
+        let mut reset = false;
+        if let Some(r) = self.config.resetting {
+            if report.state == Quality::Tracking {
+                self.tracking_streak = self.tracking_streak.saturating_add(1);
+            } else {
+                self.tracking_streak = 0;
+            }
+            if r.settled_after > 0 && self.tracking_streak >= r.settled_after {
+                // The settle guard: no random particles while settled.
+                random_fraction = 0.0;
+            }
+            if r.reset_after > 0 && self.expansions >= r.reset_after && free.is_some() {
+                random_fraction = random_fraction.max(r.reset_fraction);
+                self.expansions = 0;
+                reset = true;
+            }
+        }
         self.estimate = rw.estimate;
         let u = uniform_f32(rng);
         let m = if free.is_some() {
@@ -405,6 +491,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             resampled: due,
             injected,
             retried,
+            quality: report,
+            expanded,
+            reset: reset && injected > 0,
         })
     }
 
@@ -456,6 +545,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             sum,
             estimate,
             impossible,
+            concentration: (near.weight() / sum).clamp(0.0, 1.0),
         })
     }
 
@@ -502,7 +592,16 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// the retry's second proposal. Two [`standard_normal_pair`]s per particle.
     fn spread<R: Rng + ?Sized>(&mut self, rng: &mut R) {
         let k = self.config.retry_scale;
-        let (s_xy, s_theta) = (k * self.retry_sigma_xy_m, k * self.retry_sigma_theta_rad);
+        self.spread_by(
+            k * self.retry_sigma_xy_m,
+            k * self.retry_sigma_theta_rad,
+            rng,
+        );
+    }
+
+    /// Moves every particle by a normal step of σ `s_xy` (metres, x and y) and `s_theta`
+    /// (radians). Two [`standard_normal_pair`]s per particle.
+    fn spread_by<R: Rng + ?Sized>(&mut self, s_xy: f32, s_theta: f32, rng: &mut R) {
         for p in self.store.poses.iter_mut().take(self.len) {
             let (a, b) = standard_normal_pair(rng);
             let (c, _) = standard_normal_pair(rng);
@@ -619,7 +718,9 @@ mod tests {
     #[test]
     fn eighteen_bytes_per_particle() {
         assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
-        assert!(core::mem::size_of::<Mcl<'_, 1000>>() <= 128);
+        let fixed = core::mem::size_of::<Mcl<'_, 1000>>();
+        assert!(fixed <= 256, "{fixed}");
+        println!("Mcl: {fixed} bytes besides the particles");
     }
 
     #[test]

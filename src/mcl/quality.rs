@@ -1,0 +1,311 @@
+//! The localization-quality signal: after every update, from what the filter already knows,
+//! whether it follows the robot ([`Quality::Tracking`]), doubts it ([`Quality::Uncertain`]) or
+//! has lost it ([`Quality::Lost`]); and the recovery it drives (expansion resetting, then
+//! free-space resetting, [`Resetting`]).
+//!
+//! # Inputs (no extra work per beam in the particle loop)
+//! - **The share of beams the map explains** at the estimate: the beams whose endpoint, with the
+//!   robot at the estimate, lies within [`QualityThresholds::explained_sigmas`] × σ_hit of an
+//!   obstacle. One more pass over the scan's beams per update (not per particle), with
+//!   [`Mcl::update_prepared`](super::Mcl::update_prepared) only; the other updates have none.
+//!   Averaged over the updates with rate [`EXPLAINED_RATE`] (about the last two scans).
+//! - **The likelihood per beam**: `ln w_avg / beams` (nats per scored beam, tempered as scored:
+//!   the value the augmented-MCL recovery already follows), its fast and slow exponential
+//!   averages (rates [`LIKELIHOOD_FAST_RATE`], [`LIKELIHOOD_SLOW_RATE`], as AMCL's
+//!   `recovery_alpha_fast/slow` but on the logarithm). The drop `slow − fast` (nats per beam)
+//!   says the recent scans fit worse than the usual ones.
+//! - **The spread**: the standard deviations of the estimate (metres, the larger of x and y;
+//!   radians) and the share of the weight within [`ESTIMATE_RADIUS_M`](super::ESTIMATE_RADIUS_M)
+//!   of the heaviest particle (the concentration; a cloud split in two places has little).
+//!
+//! # Decision ([`QualityThresholds`], defaults in brackets)
+//! With the explained share `e` (its average):
+//! - `Lost` when `e < lost_explained` [0.5];
+//! - `Uncertain` when `e < tracking_explained` [0.8], or the spread is above `spread_m` [0.25 m]
+//!   or `spread_rad` [0.15 rad], or the concentration is below `concentration` [0.5];
+//! - `Tracking` otherwise.
+//!
+//! Without it (updates by a model or a closure), the drop stands in for `e`: `Lost` above
+//! `lost_drop_nats` [1.0 nats per beam], `Uncertain` above `uncertain_drop_nats` [0.3]; a
+//! filter lost for long enough that the slow average has caught up then reads as tracking,
+//! which the explained share does not.
+//!
+//! The quality score sent with it is the averaged explained share (1 − the drop, clamped to
+//! `[0, 1]`, without it).
+//!
+//! The thresholds were chosen on the first two thirds of the Intel lab log and checked on the
+//! last third (docs/localization.md, `host-tests/tests/intel_quality.rs`).
+
+/// The rate of the averaged explained share (per update): `e ← e + r·(eₖ − e)`.
+pub const EXPLAINED_RATE: f32 = 0.5;
+/// The fast average's rate of the likelihood per beam (per update).
+pub const LIKELIHOOD_FAST_RATE: f32 = 0.3;
+/// The slow average's rate of the likelihood per beam (per update).
+pub const LIKELIHOOD_SLOW_RATE: f32 = 0.02;
+
+/// What the filter thinks of its own estimate after an update.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Quality {
+    /// The estimate follows the robot: the map explains the scan there and the cloud is tight.
+    Tracking,
+    /// The scan fits only partly, or the cloud is wide or split (also before the first update).
+    #[default]
+    Uncertain,
+    /// The map does not explain the scan at the estimate: the filter has lost the robot.
+    Lost,
+}
+
+/// The thresholds of the decision (see the module docs). Validated by
+/// [`QualityThresholds::validate`] when given to [`MclConfig::with_quality`](super::MclConfig::with_quality).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct QualityThresholds {
+    /// A beam is explained when its endpoint lies within this many σ_hit of an obstacle
+    /// (dimensionless, > 0).
+    pub explained_sigmas: f32,
+    /// Averaged explained share (0 to 1) below which the state is `Uncertain`.
+    pub tracking_explained: f32,
+    /// Averaged explained share (0 to 1) below which the state is `Lost`.
+    pub lost_explained: f32,
+    /// Estimate standard deviation (metres) above which the state is at best `Uncertain`.
+    pub spread_m: f32,
+    /// Heading standard deviation (radians) above which the state is at best `Uncertain`.
+    pub spread_rad: f32,
+    /// Share of the weight near the estimate (0 to 1) below which the state is at best
+    /// `Uncertain`.
+    pub concentration: f32,
+    /// Without an explained share: drop of the likelihood per beam (nats) above which the state
+    /// is `Uncertain`.
+    pub uncertain_drop_nats: f32,
+    /// Without an explained share: drop (nats per beam) above which the state is `Lost`.
+    pub lost_drop_nats: f32,
+}
+
+impl QualityThresholds {
+    /// The defaults (module docs).
+    pub const DEFAULT: Self = Self {
+        explained_sigmas: 3.0,
+        tracking_explained: 0.8,
+        lost_explained: 0.5,
+        spread_m: 0.25,
+        spread_rad: 0.15,
+        concentration: 0.5,
+        uncertain_drop_nats: 0.3,
+        lost_drop_nats: 1.0,
+    };
+
+    /// True when every value is in range: shares in `[0, 1]` with `lost ≤ tracking`, the rest
+    /// positive (not NaN), `uncertain_drop ≤ lost_drop`.
+    pub fn validate(&self) -> bool {
+        let unit = |v: f32| (0.0..=1.0).contains(&v);
+        let pos = |v: f32| v > 0.0 && !v.is_nan();
+        unit(self.tracking_explained)
+            && unit(self.lost_explained)
+            && self.lost_explained <= self.tracking_explained
+            && unit(self.concentration)
+            && pos(self.explained_sigmas)
+            && pos(self.spread_m)
+            && pos(self.spread_rad)
+            && pos(self.uncertain_drop_nats)
+            && pos(self.lost_drop_nats)
+            && self.uncertain_drop_nats <= self.lost_drop_nats
+    }
+}
+
+impl Default for QualityThresholds {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The quality signal of one update ([`Update::quality`](super::Update::quality),
+/// [`Mcl::quality`](super::Mcl::quality)).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct QualityReport {
+    /// The decision.
+    pub state: Quality,
+    /// A score in `[0, 1]` (1 best): the averaged explained share, or `1 − drop` without it.
+    pub score: f32,
+    /// Share of this scan's beams the map explains at the estimate (0 to 1); NaN when the
+    /// update had no scan to measure it on (a model or closure update).
+    pub explained: f32,
+    /// Its average over the updates (rate [`EXPLAINED_RATE`]); NaN before the first measured.
+    pub explained_avg: f32,
+    /// This update's likelihood per beam, `ln w_avg / beams`, nats.
+    pub ln_beam: f32,
+    /// Its fast average (rate [`LIKELIHOOD_FAST_RATE`]), nats.
+    pub ln_beam_fast: f32,
+    /// Its slow average (rate [`LIKELIHOOD_SLOW_RATE`]), nats.
+    pub ln_beam_slow: f32,
+    /// The estimate's standard deviation in position (the larger of x and y), metres.
+    pub spread_m: f32,
+    /// The estimate's standard deviation in heading, radians.
+    pub spread_rad: f32,
+    /// Share of the weight within the estimate's neighbourhood (0 to 1).
+    pub concentration: f32,
+}
+
+/// The running averages behind the signal (in [`Mcl`](super::Mcl)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct QualityState {
+    explained_avg: f32,
+    fast: f32,
+    slow: f32,
+}
+
+impl QualityState {
+    pub(super) const NEW: Self = Self {
+        explained_avg: f32::NAN,
+        fast: f32::NAN,
+        slow: f32::NAN,
+    };
+
+    /// Folds one update in and decides.
+    pub(super) fn observe(
+        &mut self,
+        t: &QualityThresholds,
+        ln_beam: f32,
+        explained: Option<f32>,
+        covariance: &[[f32; 3]; 3],
+        concentration: f32,
+    ) -> QualityReport {
+        let follow = |avg: f32, v: f32, rate: f32| {
+            if !v.is_finite() {
+                avg
+            } else if avg.is_nan() {
+                v
+            } else {
+                avg + rate * (v - avg)
+            }
+        };
+        self.fast = follow(self.fast, ln_beam, LIKELIHOOD_FAST_RATE);
+        self.slow = follow(self.slow, ln_beam, LIKELIHOOD_SLOW_RATE);
+        let e = explained.unwrap_or(f32::NAN);
+        self.explained_avg = follow(self.explained_avg, e, EXPLAINED_RATE);
+        let var = |i: usize| {
+            covariance
+                .get(i)
+                .and_then(|r| r.get(i))
+                .copied()
+                .unwrap_or(0.0)
+                .max(0.0)
+        };
+        let spread_m = crate::math::sqrt(var(0).max(var(1)));
+        let spread_rad = crate::math::sqrt(var(2));
+        let wide = !(spread_m <= t.spread_m
+            && spread_rad <= t.spread_rad
+            && concentration >= t.concentration);
+        let drop = if self.slow.is_finite() && self.fast.is_finite() {
+            (self.slow - self.fast).max(0.0)
+        } else {
+            0.0
+        };
+        let (state, score) = if explained.is_some() && !self.explained_avg.is_nan() {
+            let a = self.explained_avg;
+            let state = if a < t.lost_explained {
+                Quality::Lost
+            } else if a < t.tracking_explained || wide {
+                Quality::Uncertain
+            } else {
+                Quality::Tracking
+            };
+            (state, a.clamp(0.0, 1.0))
+        } else {
+            let state = if drop > t.lost_drop_nats {
+                Quality::Lost
+            } else if drop > t.uncertain_drop_nats || wide {
+                Quality::Uncertain
+            } else {
+                Quality::Tracking
+            };
+            (state, (1.0 - drop).clamp(0.0, 1.0))
+        };
+        QualityReport {
+            state,
+            score,
+            explained: e,
+            explained_avg: self.explained_avg,
+            ln_beam,
+            ln_beam_fast: self.fast,
+            ln_beam_slow: self.slow,
+            spread_m,
+            spread_rad,
+            concentration,
+        }
+    }
+}
+
+/// Recovery in fixed memory, driven by the quality signal ([`MclConfig::with_resetting`](super::MclConfig::with_resetting);
+/// off unless given).
+///
+/// **Expansion resetting** (Ueda et al., IROS 2004, as in emcl2): when this scan's explained
+/// share at the estimate is below [`Resetting::expand_below`] (or, without it, the likelihood
+/// drop is above the `lost_drop_nats` threshold), the cloud no longer covers the robot: the
+/// update resamples the set by the weights it has, moves every particle by a normal step of
+/// σ [`Resetting::sigma_m`] (x and y) and [`Resetting::sigma_rad`] (heading), and weighs it
+/// again by the same scan (one more scoring pass, at those updates only). Same particle count,
+/// in place. Each further expansion in a row doubles the σ, up to 2^[`Resetting::max_doublings`]
+/// times.
+///
+/// **Free-space resetting**, the last resort: after [`Resetting::reset_after`] expansions in
+/// a row, the update replaces the share [`Resetting::reset_fraction`] of the set by poses uniform
+/// over the [`FreeSpace`](crate::field::FreeSpace) passed to the update (none without one),
+/// and the count starts again.
+///
+/// **Settle guard**: while the quality has been `Tracking` for [`Resetting::settled_after`]
+/// updates in a row, augmented MCL (Table 8.3) injects no random particles (a random particle
+/// winning one scan is how a settled filter gets hijacked); the guard lifts at the first update
+/// that is not `Tracking`. 0 turns the guard off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Resetting {
+    /// Explained share (0 to 1) of one scan below which the cloud is expanded.
+    pub expand_below: f32,
+    /// σ of the first expansion in x and y, metres.
+    pub sigma_m: f32,
+    /// σ of the first expansion in heading, radians.
+    pub sigma_rad: f32,
+    /// How many times the σ doubles over expansions in a row.
+    pub max_doublings: u8,
+    /// Expansions in a row before a free-space reset (0: never reset).
+    pub reset_after: u16,
+    /// Share of the particles a free-space reset replaces (0 to 1).
+    pub reset_fraction: f32,
+    /// Updates in a row of `Tracking` after which random injections stop (0: no guard).
+    pub settled_after: u16,
+}
+
+impl Resetting {
+    /// The defaults: expand below 0.5 explained, σ 0.1 m and 0.05 rad doubling up to 8 times
+    /// as much (0.8 m, 0.4 rad), a free-space reset of half the set after 10 expansions in a
+    /// row, the settle guard after 20 updates of `Tracking`.
+    pub const DEFAULT: Self = Self {
+        expand_below: 0.5,
+        sigma_m: 0.1,
+        sigma_rad: 0.05,
+        max_doublings: 3,
+        reset_after: 10,
+        reset_fraction: 0.5,
+        settled_after: 20,
+    };
+
+    /// True when every value is in range: shares in `[0, 1]`, σ finite and positive,
+    /// `max_doublings ≤ 16`.
+    pub fn validate(&self) -> bool {
+        let unit = |v: f32| (0.0..=1.0).contains(&v);
+        let pos = |v: f32| v.is_finite() && v > 0.0;
+        unit(self.expand_below)
+            && unit(self.reset_fraction)
+            && pos(self.sigma_m)
+            && pos(self.sigma_rad)
+            && self.max_doublings <= 16
+    }
+}
+
+impl Default for Resetting {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
