@@ -76,9 +76,10 @@ pub struct Mcl<'p, const N: usize> {
     /// The quality signal's averages and its last report.
     quality_state: QualityState,
     quality: QualityReport,
-    /// Expansion resets in a row; updates in a row reported `Tracking`.
+    /// Expansion resets in a row; updates in a row reported `Tracking`, and `Lost`.
     expansions: u16,
     tracking_streak: u16,
+    lost_streak: u16,
 }
 
 impl<'p, const N: usize> Mcl<'p, N> {
@@ -109,6 +110,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             quality: QualityReport::default(),
             expansions: 0,
             tracking_streak: 0,
+            lost_streak: 0,
         })
     }
 
@@ -138,6 +140,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.quality = QualityReport::default();
         self.expansions = 0;
         self.tracking_streak = 0;
+        self.lost_streak = 0;
         self.estimate = Estimate::of(self.poses(), self.weights());
     }
 
@@ -459,9 +462,14 @@ impl<'p, const N: usize> Mcl<'p, N> {
                 // The settle guard: no random particles while settled.
                 random_fraction = 0.0;
             }
-            if r.reset_after > 0 && self.expansions >= r.reset_after && free.is_some() {
+            if report.state == Quality::Lost {
+                self.lost_streak = self.lost_streak.saturating_add(1);
+            } else {
+                self.lost_streak = 0;
+            }
+            if r.reset_after > 0 && self.lost_streak >= r.reset_after && free.is_some() {
                 random_fraction = random_fraction.max(r.reset_fraction);
-                self.expansions = 0;
+                self.lost_streak = 0;
                 reset = true;
             }
         }

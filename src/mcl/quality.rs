@@ -20,13 +20,17 @@
 //!
 //! # Decision ([`QualityThresholds`], defaults in brackets)
 //! With the explained share `e` (its average):
-//! - `Lost` when `e < lost_explained` [0.5];
-//! - `Uncertain` when `e < tracking_explained` [0.8], or the spread is above `spread_m` [0.25 m]
+//! - `Lost` when `e < lost_explained` [0.35], or when `e < lost_explained_dropping` [0.5] and
+//!   the likelihood per beam has dropped by more than `dropping_nats` [0.25 nats per beam];
+//! - `Uncertain` when `e < tracking_explained` [0.65], or the spread is above `spread_m` [0.25 m]
 //!   or `spread_rad` [0.15 rad], or the concentration is below `concentration` [0.5];
-//! - `Tracking` otherwise.
+//! - `Tracking` otherwise;
+//!
+//! and a `Lost` only after `lost_after` [2] updates in a row that meet one of its conditions
+//! (`Uncertain` until then).
 //!
 //! Without it (updates by a model or a closure), the drop stands in for `e`: `Lost` above
-//! `lost_drop_nats` [1.0 nats per beam], `Uncertain` above `uncertain_drop_nats` [0.3]; a
+//! `lost_drop_nats` [1.0 nats, in the units of the scores given], `Uncertain` above `uncertain_drop_nats` [0.3]; a
 //! filter lost for long enough that the slow average has caught up then reads as tracking,
 //! which the explained share does not.
 //!
@@ -68,6 +72,17 @@ pub struct QualityThresholds {
     pub tracking_explained: f32,
     /// Averaged explained share (0 to 1) below which the state is `Lost`.
     pub lost_explained: f32,
+    /// Averaged explained share (0 to 1) below which the state is `Lost` when the likelihood
+    /// per beam is also dropping by more than `dropping_nats` (a kidnapping into a place the
+    /// map half explains).
+    pub lost_explained_dropping: f32,
+    /// The drop of the likelihood per beam (`slow − fast`, nats per beam) that, with
+    /// `lost_explained_dropping`, is `Lost`.
+    pub dropping_nats: f32,
+    /// Updates in a row that meet a `Lost` condition before the state is `Lost` (they report
+    /// `Uncertain` until then; at least 1): a scan or two the map explains poorly while the
+    /// estimate is right (a doorway, people) is not a loss.
+    pub lost_after: u8,
     /// Estimate standard deviation (metres) above which the state is at best `Uncertain`.
     pub spread_m: f32,
     /// Heading standard deviation (radians) above which the state is at best `Uncertain`.
@@ -75,10 +90,12 @@ pub struct QualityThresholds {
     /// Share of the weight near the estimate (0 to 1) below which the state is at best
     /// `Uncertain`.
     pub concentration: f32,
-    /// Without an explained share: drop of the likelihood per beam (nats) above which the state
-    /// is `Uncertain`.
+    /// Without an explained share: drop of the likelihood (nats, in the units of the scores
+    /// given: per beam for [`Mcl::update_prepared`](super::Mcl::update_prepared), per scan for
+    /// closures and models) above which the state is `Uncertain`.
     pub uncertain_drop_nats: f32,
-    /// Without an explained share: drop (nats per beam) above which the state is `Lost`.
+    /// Without an explained share: drop (nats, as `uncertain_drop_nats`) above which the state
+    /// is `Lost`.
     pub lost_drop_nats: f32,
 }
 
@@ -86,8 +103,11 @@ impl QualityThresholds {
     /// The defaults (module docs).
     pub const DEFAULT: Self = Self {
         explained_sigmas: 3.0,
-        tracking_explained: 0.8,
-        lost_explained: 0.5,
+        tracking_explained: 0.65,
+        lost_explained: 0.35,
+        lost_explained_dropping: 0.5,
+        dropping_nats: 0.25,
+        lost_after: 2,
         spread_m: 0.25,
         spread_rad: 0.15,
         concentration: 0.5,
@@ -103,6 +123,9 @@ impl QualityThresholds {
         unit(self.tracking_explained)
             && unit(self.lost_explained)
             && self.lost_explained <= self.tracking_explained
+            && unit(self.lost_explained_dropping)
+            && pos(self.dropping_nats)
+            && self.lost_after >= 1
             && unit(self.concentration)
             && pos(self.explained_sigmas)
             && pos(self.spread_m)
@@ -153,6 +176,8 @@ pub(super) struct QualityState {
     explained_avg: f32,
     fast: f32,
     slow: f32,
+    /// Updates in a row that met a `Lost` condition.
+    lost_conditions: u8,
 }
 
 impl QualityState {
@@ -160,6 +185,7 @@ impl QualityState {
         explained_avg: f32::NAN,
         fast: f32::NAN,
         slow: f32::NAN,
+        lost_conditions: 0,
     };
 
     /// Folds one update in and decides.
@@ -204,7 +230,9 @@ impl QualityState {
         };
         let (state, score) = if explained.is_some() && !self.explained_avg.is_nan() {
             let a = self.explained_avg;
-            let state = if a < t.lost_explained {
+            let state = if a < t.lost_explained
+                || (a < t.lost_explained_dropping && drop > t.dropping_nats)
+            {
                 Quality::Lost
             } else if a < t.tracking_explained || wide {
                 Quality::Uncertain
@@ -221,6 +249,17 @@ impl QualityState {
                 Quality::Tracking
             };
             (state, (1.0 - drop).clamp(0.0, 1.0))
+        };
+        let state = if state == Quality::Lost {
+            self.lost_conditions = self.lost_conditions.saturating_add(1);
+            if self.lost_conditions >= t.lost_after {
+                Quality::Lost
+            } else {
+                Quality::Uncertain
+            }
+        } else {
+            self.lost_conditions = 0;
+            state
         };
         QualityReport {
             state,
@@ -249,10 +288,11 @@ impl QualityState {
 /// in place. Each further expansion in a row doubles the σ, up to 2^[`Resetting::max_doublings`]
 /// times.
 ///
-/// **Free-space resetting**, the last resort: after [`Resetting::reset_after`] expansions in
-/// a row, the update replaces the share [`Resetting::reset_fraction`] of the set by poses uniform
-/// over the [`FreeSpace`](crate::field::FreeSpace) passed to the update (none without one),
-/// and the count starts again.
+/// **Free-space resetting**, the last resort: after [`Resetting::reset_after`] updates in a row
+/// that reported [`Quality::Lost`] (expansion has not found the robot), the update replaces the
+/// share [`Resetting::reset_fraction`] of the set by poses uniform over the
+/// [`FreeSpace`](crate::field::FreeSpace) passed to the update (none without one), and the
+/// count starts again.
 ///
 /// **Settle guard**: while the quality has been `Tracking` for [`Resetting::settled_after`]
 /// updates in a row, augmented MCL (Table 8.3) injects no random particles (a random particle
@@ -269,7 +309,7 @@ pub struct Resetting {
     pub sigma_rad: f32,
     /// How many times the σ doubles over expansions in a row.
     pub max_doublings: u8,
-    /// Expansions in a row before a free-space reset (0: never reset).
+    /// Updates in a row reported `Lost` before a free-space reset (0: never reset).
     pub reset_after: u16,
     /// Share of the particles a free-space reset replaces (0 to 1).
     pub reset_fraction: f32,
@@ -278,16 +318,16 @@ pub struct Resetting {
 }
 
 impl Resetting {
-    /// The defaults: expand below 0.5 explained, σ 0.1 m and 0.05 rad doubling up to 8 times
-    /// as much (0.8 m, 0.4 rad), a free-space reset of half the set after 10 expansions in a
-    /// row, the settle guard after 20 updates of `Tracking`.
+    /// The defaults: expand below 0.4 explained, σ 0.1 m and 0.05 rad doubling up to 8 times
+    /// as much (0.8 m, 0.4 rad), a free-space reset of the whole set after 5 updates in a row
+    /// reported `Lost`, the settle guard after 20 updates of `Tracking`.
     pub const DEFAULT: Self = Self {
-        expand_below: 0.5,
+        expand_below: 0.4,
         sigma_m: 0.1,
         sigma_rad: 0.05,
         max_doublings: 3,
-        reset_after: 10,
-        reset_fraction: 0.5,
+        reset_after: 5,
+        reset_fraction: 1.0,
         settled_after: 20,
     };
 
