@@ -160,9 +160,22 @@ fn run(
     seed: u64,
     kidnap_at: Option<usize>,
 ) -> Trace {
+    run_with(input, errors, alpha, resetting, (0.0, 0.0), seed, kidnap_at)
+}
+
+/// [`run`] with augmented-MCL recovery at `(α_slow, α_fast)`.
+fn run_with(
+    input: &TrackInput,
+    errors: &WheelErrors,
+    alpha: f32,
+    resetting: Option<Resetting>,
+    (slow, fast): (f32, f32),
+    seed: u64,
+    kidnap_at: Option<usize>,
+) -> Trace {
     let (view, free) = input.views().unwrap();
     let free = free.unwrap();
-    let config = MclConfig::new(OdometryNoise::uniform(alpha).unwrap(), 0.5, 0.0, 0.0)
+    let config = MclConfig::new(OdometryNoise::uniform(alpha).unwrap(), 0.5, slow, fast)
         .unwrap()
         .with_resetting(resetting)
         .unwrap();
@@ -304,24 +317,28 @@ fn figures() {
     ];
     println!("| odometry | α | resetting | part | lost runs | RMSE median (m) | false Lost (updates) | expansions |");
     println!("| --- | --- | --- | --- | --- | --- | --- | --- |");
+    let variants = [
+        ("off", None, (0.0, 0.0)),
+        ("on", Some(Resetting::DEFAULT), (0.0, 0.0)),
+        ("on + augmented MCL", Some(Resetting::DEFAULT), (0.001, 0.1)),
+    ];
     for (name, errors) in [
         ("wheels ×1", WheelErrors::MILD),
         ("wheels ×2", WheelErrors::STRONG),
     ] {
         for alpha in [0.005f32, 0.01] {
-            for resetting in [None, Some(Resetting::DEFAULT)] {
+            for (label, resetting, recovery) in variants {
                 for (part, seeds, range) in parts.clone() {
                     let (mut lost, mut rmse, mut false_lost, mut exp) = (0, Vec::new(), 0, 0);
                     for seed in seeds.clone() {
-                        let t = run(&input, &errors, alpha, resetting, seed, None);
+                        let t = run_with(&input, &errors, alpha, resetting, recovery, seed, None);
                         lost += usize::from(t.lost_in(range.clone()));
                         rmse.push(t.rmse_m(range.clone()));
                         false_lost += t.false_lost(range.clone());
                         exp += t.expansions;
                     }
                     println!(
-                        "| {name} | {alpha} | {} | {part} | {lost}/5 | {:.4} | {false_lost} | {exp} |",
-                        if resetting.is_some() { "on" } else { "off" },
+                        "| {name} | {alpha} | {label} | {part} | {lost}/5 | {:.4} | {false_lost} | {exp} |",
                         median(rmse)
                     );
                 }
@@ -331,11 +348,19 @@ fn figures() {
     println!();
     println!("| resetting | part | kidnap at | Lost within 5 | scans to Lost (median) | recovered within 50 | scans to recovered (median) |");
     println!("| --- | --- | --- | --- | --- | --- | --- |");
-    for resetting in [None, Some(Resetting::DEFAULT)] {
+    for (label, resetting, recovery) in variants {
         for (part, seeds, at) in [("tuning", 1..=5u64, 300usize), ("holdout", 6..=10u64, 700)] {
             let (mut fast, mut rec, mut d, mut r) = (0, 0, Vec::new(), Vec::new());
             for seed in seeds {
-                let t = run(&input, &WheelErrors::MILD, 0.005, resetting, seed, Some(at));
+                let t = run_with(
+                    &input,
+                    &WheelErrors::MILD,
+                    0.005,
+                    resetting,
+                    recovery,
+                    seed,
+                    Some(at),
+                );
                 let det = t.detected_after(at);
                 let recv = t.recovered_after(at);
                 fast += usize::from(det.is_some_and(|x| x <= 5));
@@ -344,8 +369,7 @@ fn figures() {
                 r.push(recv.map_or(f64::INFINITY, |x| x as f64));
             }
             println!(
-                "| {} | {part} | {at} | {fast}/5 | {} | {rec}/5 | {} |",
-                if resetting.is_some() { "on" } else { "off" },
+                "| {label} | {part} | {at} | {fast}/5 | {} | {rec}/5 | {} |",
                 median(d),
                 median(r)
             );

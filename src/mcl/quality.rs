@@ -26,7 +26,7 @@
 //!   or `spread_rad` [0.15 rad], or the concentration is below `concentration` [0.5];
 //! - `Tracking` otherwise;
 //!
-//! and a `Lost` only after `lost_after` [2] updates in a row that meet one of its conditions
+//! and a `Lost` only after `lost_after` (2) updates in a row that meet one of its conditions
 //! (`Uncertain` until then).
 //!
 //! Without it (updates by a model or a closure), the drop stands in for `e`: `Lost` above
@@ -347,5 +347,92 @@ impl Resetting {
 impl Default for Resetting {
     fn default() -> Self {
         Self::DEFAULT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TIGHT: [[f32; 3]; 3] = [[1e-4, 0.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1e-4]];
+
+    #[test]
+    fn defaults_validate_and_bad_values_do_not() {
+        assert!(QualityThresholds::DEFAULT.validate());
+        assert!(Resetting::DEFAULT.validate());
+        let t = QualityThresholds {
+            lost_explained: 0.9,
+            ..QualityThresholds::DEFAULT
+        };
+        assert!(!t.validate());
+        let t = QualityThresholds {
+            dropping_nats: f32::NAN,
+            ..QualityThresholds::DEFAULT
+        };
+        assert!(!t.validate());
+        let t = QualityThresholds {
+            lost_after: 0,
+            ..QualityThresholds::DEFAULT
+        };
+        assert!(!t.validate());
+        let r = Resetting {
+            sigma_m: f32::INFINITY,
+            ..Resetting::DEFAULT
+        };
+        assert!(!r.validate());
+    }
+
+    #[test]
+    fn explained_share_decides_with_hysteresis() {
+        let t = QualityThresholds::DEFAULT;
+        let mut q = QualityState::NEW;
+        for _ in 0..5 {
+            let r = q.observe(&t, -1.0, Some(0.95), &TIGHT, 1.0);
+            assert_eq!(r.state, Quality::Tracking);
+            assert!((r.score - 0.95).abs() < 1e-3);
+        }
+        // One scan the map barely explains: the average dips, one update meets a Lost
+        // condition, reported Uncertain (hysteresis).
+        let r = q.observe(&t, -1.0, Some(0.0), &TIGHT, 1.0);
+        assert_eq!(r.state, Quality::Uncertain, "{r:?}");
+        let r = q.observe(&t, -1.0, Some(0.95), &TIGHT, 1.0);
+        assert_ne!(r.state, Quality::Lost, "{r:?}");
+        // A lasting loss.
+        let mut last = Quality::Tracking;
+        for _ in 0..4 {
+            last = q.observe(&t, -3.0, Some(0.1), &TIGHT, 1.0).state;
+        }
+        assert_eq!(last, Quality::Lost);
+        // A wide cloud is at best uncertain.
+        let mut q = QualityState::NEW;
+        let wide = [[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1e-4]];
+        assert_eq!(
+            q.observe(&t, -1.0, Some(0.95), &wide, 1.0).state,
+            Quality::Uncertain
+        );
+        assert_eq!(
+            q.observe(&t, -1.0, Some(0.95), &TIGHT, 0.2).state,
+            Quality::Uncertain
+        );
+    }
+
+    #[test]
+    fn without_a_scan_the_likelihood_drop_decides() {
+        let t = QualityThresholds::DEFAULT;
+        let mut q = QualityState::NEW;
+        for _ in 0..50 {
+            assert_eq!(
+                q.observe(&t, -100.0, None, &TIGHT, 1.0).state,
+                Quality::Tracking
+            );
+        }
+        let mut states = [Quality::Tracking; 3];
+        for s in &mut states {
+            *s = q.observe(&t, -110.0, None, &TIGHT, 1.0).state;
+        }
+        // Lost from the second update that meets the condition (`lost_after` 2).
+        assert_eq!(states, [Quality::Uncertain, Quality::Lost, Quality::Lost]);
+        let r = q.observe(&t, f32::NAN, None, &TIGHT, 1.0);
+        assert!(r.score.is_finite() && (0.0..=1.0).contains(&r.score));
     }
 }
