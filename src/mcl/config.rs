@@ -182,9 +182,10 @@ impl MclConfig {
     /// robot more often. See `docs/localization.md`.
     ///
     /// # Errors
-    /// [`MclError::BadConfig`] for a NaN `drop_nats` or a `scale` not finite and positive.
+    /// [`MclError::BadConfig`] for a NaN `drop_nats` or a `scale` not positive or above
+    /// [`MAX_RETRY_SCALE`] (`--retry=-inf,1e30` moved every particle to infinity).
     pub fn with_retry(self, drop_nats: f32, scale: f32) -> Result<Self, MclError> {
-        if drop_nats.is_nan() || !(scale.is_finite() && scale > 0.0) {
+        if drop_nats.is_nan() || !(scale > 0.0 && scale <= MAX_RETRY_SCALE) {
             return Err(MclError::BadConfig);
         }
         Ok(Self {
@@ -209,6 +210,10 @@ impl MclConfig {
         self.recovery_alpha_fast > 0.0
     }
 }
+
+/// The largest scale of the odometry step's spread the retry takes ([`MclConfig::with_retry`]):
+/// a thousand times the step's own spread is already a global search.
+pub const MAX_RETRY_SCALE: f32 = 1_000.0;
 
 /// The rate of the exponential average of `ln w_avg` that the retry compares each
 /// update with ([`MclConfig::with_retry`]).

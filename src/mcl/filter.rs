@@ -837,12 +837,15 @@ mod tests {
         assert!(!c.retry());
         assert!(c.with_retry(0.1, 0.5).unwrap().retry());
         assert!(c.with_retry(f32::NEG_INFINITY, 2.0).unwrap().retry());
+        assert!(c.with_retry(0.1, crate::mcl::MAX_RETRY_SCALE).is_ok());
         assert!(!c.with_retry(f32::INFINITY, 1.0).unwrap().retry());
         for (d, k) in [
             (f32::NAN, 1.0),
             (0.1, 0.0),
             (0.1, -1.0),
             (0.1, f32::INFINITY),
+            (f32::NEG_INFINITY, 1e30),
+            (0.1, 1_000.5),
         ] {
             assert_eq!(
                 c.with_retry(d, k).err(),

@@ -35,7 +35,9 @@ pub mod quality;
 pub mod resample;
 pub mod rng;
 
-pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
+pub use config::{
+    MclConfig, MclError, Particles, Update, MAX_PARTICLES, MAX_RETRY_SCALE, RETRY_LEVEL_RATE,
+};
 pub use estimate::Estimate;
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
 pub use motion::{
