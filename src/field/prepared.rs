@@ -195,15 +195,11 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
     /// bearing order; max-range and invalid readings were dropped, so `j` counts kept beams
     /// only) with the quantized endpoint distance (metres) that was scored.
     ///
-    /// A pose with a NaN or infinite coordinate scores NaN (`each` is not called): it is no
-    /// place on the map, and a finite score would let it win a filter's update.
+    /// A pose with a NaN or infinite coordinate scores NaN: it is no place on the map, and a
+    /// finite score would let it win a filter's update (`each` is called for the beams of a
+    /// NaN heading at a finite position, with meaningless distances, and not at all for a NaN
+    /// position).
     pub fn score_with<F: FnMut(usize, f32)>(&self, pose: &Pose, mut each: F) -> ScanScore {
-        if !pose.is_finite() {
-            return ScanScore {
-                log_likelihood: f32::NAN,
-                ..self.counts
-            };
-        }
         let view = self.field.view();
         let table = self.field.table();
         let step = view.step_m();
@@ -219,6 +215,15 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
                 self.fixed_path::<F, true>(ax, ay, c, s, f, &mut each)
             } else {
                 self.fixed_path::<F, false>(ax, ay, c, s, f, &mut each)
+            };
+            // A NaN or infinite heading (its sine is NaN; the fixed-point path read it as 0):
+            // `sin − sin` is NaN then and 0 otherwise, two instructions and no branch. A NaN or
+            // infinite position never takes this path.
+            sum += sin_t - sin_t;
+        } else if !pose.is_finite() {
+            return ScanScore {
+                log_likelihood: f32::NAN,
+                ..self.counts
             };
         } else {
             let inv_scale = pow2(-(self.frac_bits as i32) - 2);

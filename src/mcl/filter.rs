@@ -328,7 +328,8 @@ impl<'p, const N: usize> Mcl<'p, N> {
             prepared.score_with(p, |_, d| explained += u32::from(d <= near_m));
             Some(explained as f32 * per_beam)
         };
-        self.update_scaled(
+        // The prepared scan scores a NaN or infinite pose NaN itself: no check per particle.
+        self.update_scaled::<false, _, _, _>(
             |p| scan.score(p).log_likelihood,
             per_beam,
             explain,
@@ -381,11 +382,19 @@ impl<'p, const N: usize> Mcl<'p, N> {
         free: Option<&FreeSpace<'_>>,
         rng: &mut R,
     ) -> Result<Update, MclError> {
-        self.update_scaled(log_likelihood, 1.0, |_| None, free, rng)
+        self.update_scaled::<true, _, _, _>(log_likelihood, 1.0, |_| None, free, rng)
     }
 
     #[allow(clippy::too_many_lines)]
-    fn update_scaled<F: FnMut(&Pose) -> f32, E: FnMut(&Pose) -> Option<f32>, R: Rng + ?Sized>(
+    /// The update; `CHECK`: a particle with a NaN or infinite coordinate is made impossible
+    /// here, without asking `log_likelihood` (which may not know it is nowhere); without it,
+    /// the scorer must score such a pose NaN itself (every scorer of the crate does).
+    fn update_scaled<
+        const CHECK: bool,
+        F: FnMut(&Pose) -> f32,
+        E: FnMut(&Pose) -> Option<f32>,
+        R: Rng + ?Sized,
+    >(
         &mut self,
         mut log_likelihood: F,
         recovery_scale: f32,
@@ -403,7 +412,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         let mut retried = false;
         let mut expanded = false;
         let rw = loop {
-            let Some(rw) = self.reweight(&mut log_likelihood) else {
+            let Some(rw) = self.reweight::<CHECK, F>(&mut log_likelihood) else {
                 self.reset_weights_only();
                 return Err(MclError::AllImpossible);
             };
@@ -516,16 +525,19 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// weights need not be). The weights are left unnormalized (`eᵢ`, summing to `S`): the
     /// caller resamples from them or divides them by `S`. None when every particle is
     /// impossible (the weights are then garbage: the caller resets them).
-    fn reweight<F: FnMut(&Pose) -> f32>(&mut self, log_likelihood: &mut F) -> Option<Reweighted> {
+    fn reweight<const CHECK: bool, F: FnMut(&Pose) -> f32>(
+        &mut self,
+        log_likelihood: &mut F,
+    ) -> Option<Reweighted> {
         let n = self.len;
         let uniform = self.uniform;
         let (poses, weights) = (&self.store.poses, &mut self.store.weights);
         // Two loops rather than a test per particle: with uniform weights the prior's log is
         // the same for all and goes into the total below.
         let (max, best) = if uniform {
-            log_weights::<false, F>(poses, weights, n, log_likelihood)
+            log_weights::<false, CHECK, F>(poses, weights, n, log_likelihood)
         } else {
-            log_weights::<true, F>(poses, weights, n, log_likelihood)
+            log_weights::<true, CHECK, F>(poses, weights, n, log_likelihood)
         };
         if max == f32::NEG_INFINITY {
             return None;
@@ -677,11 +689,11 @@ impl<'p, const N: usize> Mcl<'p, N> {
 }
 
 /// Pass 1 of [`Mcl::reweight`]: `wᵢ ← ln p(z | xᵢ)` (plus `ln wᵢ` when `PRIOR`) for the first
-/// `n` particles, a NaN log-likelihood and a particle with a NaN or infinite coordinate
-/// counting as `−∞` and `+∞` clamped to `f32::MAX`; returns the largest and its index (the
-/// first on ties).
+/// `n` particles, a NaN log-likelihood (and, with `CHECK`, a particle with a NaN or infinite
+/// coordinate) counting as `−∞` and `+∞` clamped to `f32::MAX`; returns the largest and its
+/// index (the first on ties).
 #[inline]
-fn log_weights<const PRIOR: bool, F: FnMut(&Pose) -> f32>(
+fn log_weights<const PRIOR: bool, const CHECK: bool, F: FnMut(&Pose) -> f32>(
     poses: &[Pose],
     weights: &mut [f32],
     n: usize,
@@ -692,7 +704,7 @@ fn log_weights<const PRIOR: bool, F: FnMut(&Pose) -> f32>(
     for (i, (p, w)) in poses.iter().zip(weights.iter_mut()).take(n).enumerate() {
         // A particle with a NaN or infinite coordinate is nowhere: impossible, whatever the
         // scorer would say (it is not asked).
-        let l = if p.is_finite() {
+        let l = if !CHECK || p.is_finite() {
             log_likelihood(p)
         } else {
             f32::NAN
