@@ -30,8 +30,8 @@ struct Reweighted {
     sum: f32,
     /// The estimate, with the ESS.
     estimate: Estimate,
-    /// Some particle scored `−∞` (an impossible pose, a NaN score, a NaN or infinite
-    /// particle): its weight is 0.
+    /// Some particle scored NaN (a NaN or infinite particle, or a NaN score): its weight is 0
+    /// and it must go.
     impossible: bool,
     /// The share of the weight near the estimate's centre (0 to 1).
     concentration: f32,
@@ -534,7 +534,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         let (poses, weights) = (&self.store.poses, &mut self.store.weights);
         // Two loops rather than a test per particle: with uniform weights the prior's log is
         // the same for all and goes into the total below.
-        let (max, best) = if uniform {
+        let (max, best, impossible) = if uniform {
             log_weights::<false, CHECK, F>(poses, weights, n, log_likelihood)
         } else {
             log_weights::<true, CHECK, F>(poses, weights, n, log_likelihood)
@@ -546,9 +546,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         let mut near = Moments::new(&center, ESTIMATE_RADIUS_M, ESTIMATE_HALF_ANGLE_RAD);
         // S = Σ e^{v − max} ∈ [1, n]: the best particle contributes exactly 1.
         let (mut sum, mut sum_sq) = (0.0f32, 0.0f32);
-        let mut impossible = false;
         for (p, w) in poses.iter().zip(weights.iter_mut()).take(n) {
-            impossible |= *w == f32::NEG_INFINITY;
             let e = exp_nonpositive(*w - max);
             *w = e;
             sum += e;
@@ -571,8 +569,8 @@ impl<'p, const N: usize> Mcl<'p, N> {
 
     /// Whether the set is resampled at this update (recovery aside): when the effective sample
     /// size `ess` falls below the configured fraction of the way from a degenerate set (ESS 1)
-    /// to an even one (ESS `n`), `ess − 1 < f·(n − 1)`, or when some particle is impossible
-    /// (it must not stay in the set). The ESS of a set is never below 1, so the plain
+    /// to an even one (ESS `n`), `ess − 1 < f·(n − 1)`, or when some particle scored NaN (a NaN
+    /// or infinite particle, which must not stay in the set). The ESS of a set is never below 1, so the plain
     /// `ess < f·n` could never fire for `f·n ≤ 1` (2 particles at `f` = 0.5); for hundreds
     /// of particles the two differ by half a particle.
     fn resampling_due(&self, ess: f32, impossible: bool) -> bool {
@@ -690,17 +688,18 @@ impl<'p, const N: usize> Mcl<'p, N> {
 
 /// Pass 1 of [`Mcl::reweight`]: `wᵢ ← ln p(z | xᵢ)` (plus `ln wᵢ` when `PRIOR`) for the first
 /// `n` particles, a NaN log-likelihood (and, with `CHECK`, a particle with a NaN or infinite
-/// coordinate) counting as `−∞` and `+∞` clamped to `f32::MAX`; returns the largest and its
-/// index (the first on ties).
+/// coordinate) counting as `−∞` and `+∞` clamped to `f32::MAX`; returns the largest, its
+/// index (the first on ties), and whether some score was NaN.
 #[inline]
 fn log_weights<const PRIOR: bool, const CHECK: bool, F: FnMut(&Pose) -> f32>(
     poses: &[Pose],
     weights: &mut [f32],
     n: usize,
     log_likelihood: &mut F,
-) -> (f32, usize) {
+) -> (f32, usize, bool) {
     let mut max = f32::NEG_INFINITY;
     let mut best = 0usize;
+    let mut nan = false;
     for (i, (p, w)) in poses.iter().zip(weights.iter_mut()).take(n).enumerate() {
         // A particle with a NaN or infinite coordinate is nowhere: impossible, whatever the
         // scorer would say (it is not asked).
@@ -712,6 +711,8 @@ fn log_weights<const PRIOR: bool, const CHECK: bool, F: FnMut(&Pose) -> f32>(
         let l = if l <= f32::MAX {
             l
         } else if l.is_nan() {
+            // Off the hot path: only NaN scores (a NaN or infinite particle) come here.
+            nan = true;
             f32::NEG_INFINITY
         } else {
             f32::MAX
@@ -723,7 +724,7 @@ fn log_weights<const PRIOR: bool, const CHECK: bool, F: FnMut(&Pose) -> f32>(
             best = i;
         }
     }
-    (max, best)
+    (max, best, nan)
 }
 
 #[cfg(test)]
