@@ -479,6 +479,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             if r.reset_after > 0 && self.lost_streak >= r.reset_after && free.is_some() {
                 random_fraction = random_fraction.max(r.reset_fraction);
                 self.lost_streak = 0;
+                // The next expansion starts from the first σ: the fresh particles are not to
+                // be blurred by the widest step.
+                self.expansions = 0;
                 reset = true;
             }
         }

@@ -292,7 +292,7 @@ impl QualityState {
 /// that reported [`Quality::Lost`] (expansion has not found the robot), the update replaces the
 /// share [`Resetting::reset_fraction`] of the set by poses uniform over the
 /// [`FreeSpace`](crate::field::FreeSpace) passed to the update (none without one), and the
-/// count starts again.
+/// count starts again, as does the expansions' σ.
 ///
 /// **Settle guard**: while the quality has been `Tracking` for [`Resetting::settled_after`]
 /// updates in a row, augmented MCL (Table 8.3) injects no random particles (a random particle
