@@ -219,7 +219,10 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
             // A NaN or infinite heading (its sine is NaN; the fixed-point path read it as 0):
             // `sin − sin` is NaN then and 0 otherwise, two instructions and no branch. A NaN or
             // infinite position never takes this path.
-            sum += sin_t - sin_t;
+            #[allow(clippy::eq_op)] // NaN − NaN is the point: not 0.
+            {
+                sum += sin_t - sin_t;
+            }
         } else if !pose.is_finite() {
             return ScanScore {
                 log_likelihood: f32::NAN,
