@@ -173,7 +173,8 @@ impl<const N: usize> SensorModel<N> for BeamFieldModel<'_> {
                 None => score.invalid = score.invalid.saturating_add(1),
             },
         );
-        score.log_likelihood = sum;
+        // A NaN or infinite pose is nowhere: no finite score for it.
+        score.log_likelihood = if pose.is_finite() { sum } else { f32::NAN };
         score.unpaired = saturating_u16(ranges.len().saturating_sub(layout.len()));
         score
     }

@@ -214,8 +214,8 @@ impl<'v, 'b> MapCorrelation<'v, 'b> {
     pub fn window_origin(&self, x_m: f32, y_m: f32) -> (i64, i64) {
         let (gx, gy) = self.view.to_grid(x_m, y_m);
         (
-            cell_index(gx) - i64::from(self.width / 2),
-            cell_index(gy) - i64::from(self.height / 2),
+            cell_index(gx).saturating_sub(i64::from(self.width / 2)),
+            cell_index(gy).saturating_sub(i64::from(self.height / 2)),
         )
     }
 
@@ -261,8 +261,8 @@ impl<'v, 'b> MapCorrelation<'v, 'b> {
             scored += 1;
             let ux = c * beam.cos - s * beam.sin;
             let uy = s * beam.cos + c * beam.sin;
-            let lx = cell_index(ax + r * ux) - ox;
-            let ly = cell_index(ay + r * uy) - oy;
+            let lx = cell_index(ax + r * ux).saturating_sub(ox);
+            let ly = cell_index(ay + r * uy).saturating_sub(oy);
             let slot = if (0..w).contains(&lx) && (0..h).contains(&ly) {
                 usize::try_from(ly * w + lx)
                     .ok()
@@ -277,8 +277,12 @@ impl<'v, 'b> MapCorrelation<'v, 'b> {
         }
         let (mut a, mut b, mut both) = (0u32, 0u32, 0u32);
         let rows = self.local.chunks_exact(self.width as usize);
-        for (iy, row) in (oy..).zip(rows) {
-            for (ix, cell) in (ox..).zip(row) {
+        // Saturating, not `(oy..)`: a pose far off the map (or NaN) saturates the origin at
+        // `i64::MAX`, and a range from there overflows.
+        for (dy, row) in (0i64..).zip(rows) {
+            let iy = oy.saturating_add(dy);
+            for (dx, cell) in (0i64..).zip(row) {
+                let ix = ox.saturating_add(dx);
                 let m = u32::from(self.occupied(ix, iy));
                 let l = u32::from(cell.get());
                 a += m;
@@ -330,7 +334,8 @@ impl<'v, 'b> MapCorrelation<'v, 'b> {
 
 impl<const N: usize> SensorModel<N> for MapCorrelation<'_, '_> {
     /// `log_likelihood = ln max(ρ, ε)` ([`CORRELATION_EPSILON`]): a similarity on a log scale,
-    /// **not** a log-density of the scan. The counts are those of [`Correlation::counts`].
+    /// **not** a log-density of the scan; NaN for a pose with a NaN or infinite coordinate.
+    /// The counts are those of [`Correlation::counts`].
     fn score_strided(
         &self,
         layout: &BeamLayout<N>,
@@ -340,7 +345,12 @@ impl<const N: usize> SensorModel<N> for MapCorrelation<'_, '_> {
     ) -> ScanScore {
         let c = self.correlate_strided(layout, scan, pose, stride);
         ScanScore {
-            log_likelihood: c.log_score(),
+            // A NaN or infinite pose is nowhere: no finite score for it.
+            log_likelihood: if pose.is_finite() {
+                c.log_score()
+            } else {
+                f32::NAN
+            },
             ..c.counts
         }
     }

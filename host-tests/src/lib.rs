@@ -13,6 +13,7 @@ pub mod reference_backend;
 pub mod sonar_sim;
 pub mod sonar_uci;
 pub mod splitmix;
+pub mod wheel_odometry;
 
 use std::path::PathBuf;
 

@@ -250,8 +250,8 @@ fn prepared_matches_score_on_real_maps_and_scans() {
     }
 }
 
-/// Poses the fixed-point path cannot take (far off the map, NaN) go through the f32 path and
-/// still agree with `score`; a stride keeps the same beams and counts as `score_strided`.
+/// Poses the fixed-point path cannot take (far off the map) go through the f32 path and still
+/// agree with `score`; NaN and infinite poses score NaN on both; a stride keeps the same beams and counts as `score_strided`.
 #[test]
 fn fallback_poses_and_stride() {
     let log = intel();
@@ -270,12 +270,26 @@ fn fallback_poses_and_stride() {
         compare(&lf, &prep, &layout, &scan, &pose, Stride::ONE, &mut t);
     }
     assert_eq!(t.fallback_poses, 3);
-    // NaN: every beam reads code 255 on both paths.
-    let nan = Pose::new(f32::NAN, 0.0, 0.0);
-    assert_eq!(lf.score(&layout, &scan, &nan), prep.score(&nan));
-    let mut codes = Vec::new();
-    prep.score_with(&nan, |_, d| codes.push(d / lf.view().step_m()));
-    assert!(!codes.is_empty() && codes.iter().all(|&c| (c - 255.0).abs() < 1e-3));
+    // NaN or infinite: no place on the map, NaN on both paths (it used to be the finite sum of
+    // code 255 on every beam), with the same counts; no beam is passed to `each`.
+    for nowhere in [
+        Pose::new(f32::NAN, 0.0, 0.0),
+        Pose::new(0.0, f32::INFINITY, 0.0),
+        Pose::new(0.0, 0.0, f32::NAN),
+    ] {
+        let (a, b) = (lf.score(&layout, &scan, &nowhere), prep.score(&nowhere));
+        assert!(
+            a.log_likelihood.is_nan() && b.log_likelihood.is_nan(),
+            "{nowhere:?}"
+        );
+        assert_eq!(
+            (a.scored, a.max_range, a.invalid),
+            (b.scored, b.max_range, b.invalid)
+        );
+    }
+    let mut codes = 0;
+    prep.score_with(&Pose::new(f32::NAN, 0.0, 0.0), |_, _| codes += 1);
+    assert_eq!(codes, 0);
     for s in [2, 3, 7] {
         let stride = Stride::new(s).unwrap();
         let ps = lf.prepare_strided(&layout, &scan, stride);

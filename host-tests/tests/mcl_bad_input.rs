@@ -1,5 +1,7 @@
 //! The localizer under bad input (property tests with random inputs): NaN or infinite
-//! odometry, empty and all-invalid scans, zero capacity, scores of NaN / ±∞ / huge magnitude.
+//! odometry, steps beyond the motion model, empty and all-invalid scans, zero capacity, scores
+//! of NaN / ±∞ / huge magnitude, particles and poses with NaN or infinite coordinates, sets too
+//! small for the resampling threshold.
 //! Every case ends in a typed error or a documented skip, never a panic, never a NaN in the
 //! particles or weights.
 
@@ -78,13 +80,15 @@ proptest! {
         match OdometryStep::between(&prev, &cur) {
             Ok(step) => {
                 prop_assert!(step.rot1_rad().is_finite() && step.trans_m().is_finite());
-                // Steps whose samples overflow f32 are beyond any odometry; keep to metres.
-                if step.trans_m() < 1e3 {
-                    f.predict(&step, &mut rng);
-                    healthy(&f);
-                }
+                prop_assert!(step.trans_m().abs() <= beamfield::mcl::MAX_STEP_M);
+                f.predict(&step, &mut rng);
+                healthy(&f);
             }
-            Err(e) => prop_assert_eq!(e, beamfield::mcl::MotionError::NonFiniteOdometry),
+            Err(e) => prop_assert!(matches!(
+                e,
+                beamfield::mcl::MotionError::NonFiniteOdometry
+                    | beamfield::mcl::MotionError::StepTooLarge
+            )),
         }
     }
 
@@ -208,5 +212,170 @@ fn free_space_corruptions_are_typed_errors() {
         let mut b = fs.clone();
         b[bit / 8] ^= 1 << (bit % 8);
         assert!(FreeSpace::parse(&b).is_err(), "bit {bit}");
+    }
+}
+
+/// Poses with a NaN or infinite coordinate, each in one place.
+fn nowhere() -> [Pose; 6] {
+    [
+        Pose::new(f32::NAN, 1.0, 0.0),
+        Pose::new(1.0, f32::NAN, 0.0),
+        Pose::new(1.0, 1.0, f32::NAN),
+        Pose::new(f32::INFINITY, 1.0, 0.0),
+        Pose::new(1.0, f32::NEG_INFINITY, 0.0),
+        Pose::new(1.0, 1.0, f32::INFINITY),
+    ]
+}
+
+#[test]
+fn no_scorer_gives_a_nan_pose_a_finite_score() {
+    use beamfield::SensorModel;
+    use beamfield::{BeamFieldModel, BeamIntrinsics, BeamModel, MapCorrelation, RayCaster};
+    let (blob, _) = room();
+    let view = FieldView::parse(&blob).unwrap();
+    let lf = LikelihoodField::new(view, LikelihoodParams::new(0.9, 0.1, 0.05, 5.0).unwrap());
+    let layout: BeamLayout<30> =
+        BeamLayout::uniform(-1.5, 0.1, 30, 5.0, SensorMount::CENTERED).unwrap();
+    let scan: Scan<30> = Scan::from_ranges(&[0.7; 30]).unwrap();
+    let prepared = lf.prepare(&layout, &scan);
+    let tempered = Tempered::new(
+        LikelihoodField::new(view, LikelihoodParams::new(0.9, 0.1, 0.05, 5.0).unwrap()),
+        4.0,
+        1,
+    )
+    .unwrap();
+    let tempered_scan = tempered.prepare(&layout, &scan);
+    let beam = BeamFieldModel::new(
+        BeamModel::new(BeamIntrinsics::amcl_defaults(5.0).unwrap()),
+        RayCaster::new(view).unwrap(),
+    );
+    let mut buf = vec![0u8; 16 * 16];
+    let corr = MapCorrelation::new(view, 16, 16, &mut buf).unwrap();
+    let inside = Pose::new(1.0, 1.0, 0.3);
+    assert!(prepared.score(&inside).log_likelihood.is_finite());
+    for p in nowhere() {
+        // Before: the prepared scan scored (NaN, 1, 0) as a finite −161.5 (its f32 path read
+        // the cells at a saturated index), and the other models did the same.
+        assert!(prepared.score(&p).log_likelihood.is_nan(), "prepared {p:?}");
+        assert!(
+            tempered_scan.score(&p).log_likelihood.is_nan(),
+            "tempered {p:?}"
+        );
+        assert!(
+            lf.score(&layout, &scan, &p).log_likelihood.is_nan(),
+            "field {p:?}"
+        );
+        assert!(
+            tempered.score(&layout, &scan, &p).log_likelihood.is_nan(),
+            "tempered model {p:?}"
+        );
+        assert!(
+            beam.score(&layout, &scan, &p).log_likelihood.is_nan(),
+            "beam {p:?}"
+        );
+        assert!(
+            corr.score(&layout, &scan, &p).log_likelihood.is_nan(),
+            "correlation {p:?}"
+        );
+    }
+}
+
+/// The case: a step of 1e20 m was accepted and one prediction made every particle NaN;
+/// the next updates returned `Ok` with the estimate (0, 0, 0) and ESS 500.
+#[test]
+fn a_step_beyond_the_motion_model_is_refused() {
+    assert_eq!(
+        OdometryStep::new(0.0, 1e20, 0.0).err(),
+        Some(beamfield::mcl::MotionError::StepTooLarge)
+    );
+    assert!(OdometryNoise::uniform(1e30).is_err());
+}
+
+/// Particles at a NaN or infinite pose never survive an update: with the field's own scorer
+/// they are impossible, and the set is resampled from the finite ones.
+#[test]
+fn nan_particles_never_survive_an_update() {
+    let (blob, fs) = room();
+    let free = FreeSpace::parse(&fs).unwrap();
+    let view = FieldView::parse(&blob).unwrap();
+    let lf = LikelihoodField::new(view, LikelihoodParams::new(0.9, 0.1, 0.05, 5.0).unwrap());
+    let model = Tempered::new(lf, 4.0, 1).unwrap();
+    let layout: BeamLayout<30> =
+        BeamLayout::uniform(-1.5, 0.1, 30, 5.0, SensorMount::CENTERED).unwrap();
+    let scan: Scan<30> = Scan::from_ranges(&[0.7; 30]).unwrap();
+    let prepared = model.prepare(&layout, &scan);
+    let mut store = Particles::<N>::new();
+    let mut f = Mcl::new(&mut store, config()).unwrap();
+    let mut rng = SplitMix64::new(3);
+    f.init_uniform(N, &free, &mut rng).unwrap();
+    let bad = nowhere();
+    let mut k = 0;
+    // Half the set made NaN or infinite (move_particles refuses them, so through a copy).
+    let mut store2 = Particles::<N>::new();
+    let mut g = Mcl::new(&mut store2, config()).unwrap();
+    g.init_gaussian(N, &Pose::new(1.0, 1.0, 0.0), 3e38, 0.1, &mut rng)
+        .unwrap();
+    let overflowed = g.poses().iter().filter(|p| !p.is_finite()).count();
+    assert!(overflowed > 0, "σ 3e38 should overflow some particles");
+    for _ in 0..3 {
+        let u = g.update_prepared(&prepared, Some(&free), &mut rng).unwrap();
+        assert!(u.estimate.pose.is_finite());
+        assert!(
+            g.poses().iter().all(Pose::is_finite),
+            "a non-finite particle survived"
+        );
+    }
+    // And a scorer that would give them a finite score is not asked.
+    f.move_particles(|p| {
+        k += 1;
+        if k % 2 == 0 {
+            bad[k % bad.len()]
+        } else {
+            *p
+        }
+    });
+    assert!(f.poses().iter().all(Pose::is_finite));
+    let mut store3 = Particles::<N>::new();
+    let mut h = Mcl::new(&mut store3, config()).unwrap();
+    h.init_gaussian(N, &Pose::new(1.0, 1.0, 0.0), 3e38, 0.1, &mut rng)
+        .unwrap();
+    h.update_with(|_| 0.0, None, &mut rng).unwrap();
+    assert!(
+        h.poses().iter().all(Pose::is_finite),
+        "a closure's finite score kept one"
+    );
+}
+
+/// Two particles at the usual resampling fraction 0.5: the ESS of a set is never below 1, and
+/// the test was `ess < 0.5·2`, so the set was never resampled.
+#[test]
+fn two_particles_resample() {
+    let mut store = Particles::<2>::new();
+    let mut f = Mcl::new(&mut store, config()).unwrap();
+    let mut rng = SplitMix64::new(4);
+    f.init_gaussian(2, &Pose::new(1.0, 1.0, 0.0), 0.5, 0.1, &mut rng)
+        .unwrap();
+    let keep = f.poses()[0];
+    let u = f
+        .update_with(|p| if *p == keep { 0.0 } else { -30.0 }, None, &mut rng)
+        .unwrap();
+    assert!(u.resampled, "{u:?}");
+    assert!(f.poses().iter().all(|p| *p == keep));
+}
+
+/// A pose far off the map (finite) put the correlation window's origin at `i64::MAX`, and its
+/// row loop overflowed (a panic in a debug build).
+#[test]
+fn correlation_far_off_the_map_does_not_panic() {
+    use beamfield::{MapCorrelation, SensorModel};
+    let (blob, _) = room();
+    let view = FieldView::parse(&blob).unwrap();
+    let layout: BeamLayout<30> =
+        BeamLayout::uniform(-1.5, 0.1, 30, 5.0, SensorMount::CENTERED).unwrap();
+    let scan: Scan<30> = Scan::from_ranges(&[0.7; 30]).unwrap();
+    let mut buf = vec![0u8; 16 * 16];
+    let corr = MapCorrelation::new(view, 16, 16, &mut buf).unwrap();
+    for p in [Pose::new(1e30, -1e30, 0.0), Pose::new(-3e38, 3e38, 1.0)] {
+        assert!(!corr.score(&layout, &scan, &p).log_likelihood.is_nan());
     }
 }

@@ -258,7 +258,8 @@ impl<'a> LikelihoodField<'a> {
     ///
     /// Readings are paired with the layout's beams in order; readings past the last beam are
     /// counted in [`ScanScore::unpaired`]. Max-range and invalid readings are skipped and
-    /// counted. `log_likelihood` is finite for every input.
+    /// counted. `log_likelihood` is finite for every finite pose, and NaN for a pose with a NaN
+    /// or infinite coordinate (the counts are still the scan's).
     pub fn score<const N: usize>(
         &self,
         layout: &BeamLayout<N>,
@@ -330,6 +331,10 @@ impl<'a> LikelihoodField<'a> {
             }
         }
         let invalid = paired - scored - max_range;
+        // A NaN or infinite pose is nowhere: its cells were read at a saturated index.
+        if !sensor.is_finite() {
+            sum = f32::NAN;
+        }
         ScanScore {
             log_likelihood: sum,
             scored: sat16(scored),

@@ -36,8 +36,9 @@
 //! # Fast-path conditions
 //! The integer path is taken when the robot's grid position is within a range computed at
 //! preparation (the map's size plus the scan's reach, so that no fixed-point sum overflows and
-//! the `u32` cell index cannot wrap back onto the map). A pose outside it (far off the map,
-//! NaN) is scored by a per-beam `f32` path with the same result semantics.
+//! the `u32` cell index cannot wrap back onto the map). A pose outside it (far off the map) is
+//! scored by a per-beam `f32` path with the same result semantics. A pose with a NaN or
+//! infinite coordinate scores NaN.
 
 use super::likelihood::{LikelihoodField, LIKELIHOOD_TABLE_LEN};
 #[cfg(feature = "tiled-field")]
@@ -193,6 +194,11 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
     /// As [`PreparedScan::score`], calling `each(j, distance_m)` for the `j`-th kept beam (in
     /// bearing order; max-range and invalid readings were dropped, so `j` counts kept beams
     /// only) with the quantized endpoint distance (metres) that was scored.
+    ///
+    /// A pose with a NaN or infinite coordinate scores NaN: it is no place on the map, and a
+    /// finite score would let it win a filter's update (`each` is called for the beams of a
+    /// NaN heading at a finite position, with meaningless distances, and not at all for a NaN
+    /// position).
     pub fn score_with<F: FnMut(usize, f32)>(&self, pose: &Pose, mut each: F) -> ScanScore {
         let view = self.field.view();
         let table = self.field.table();
@@ -209,6 +215,18 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
                 self.fixed_path::<F, true>(ax, ay, c, s, f, &mut each)
             } else {
                 self.fixed_path::<F, false>(ax, ay, c, s, f, &mut each)
+            };
+            // A NaN or infinite heading (its sine is NaN; the fixed-point path read it as 0):
+            // `sin − sin` is NaN then and 0 otherwise, two instructions and no branch. A NaN or
+            // infinite position never takes this path.
+            #[allow(clippy::eq_op)] // NaN − NaN is the point: not 0.
+            {
+                sum += sin_t - sin_t;
+            }
+        } else if !pose.is_finite() {
+            return ScanScore {
+                log_likelihood: f32::NAN,
+                ..self.counts
             };
         } else {
             let inv_scale = pow2(-(self.frac_bits as i32) - 2);

@@ -62,7 +62,7 @@ impl core::ops::BitOr for EstimateFlags {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
 pub enum QualityState {
-    /// 0: not assessed (the device computes no quality signal yet).
+    /// 0: not assessed (the device computes no quality signal).
     #[default]
     Unknown = 0,
     /// 1: the estimate follows the robot.
@@ -86,8 +86,9 @@ impl QualityState {
     }
 }
 
-/// The quality signal of an [`Estimate`], reserved for a future assessment of the estimate: a
-/// device that computes none sends [`QualityState::Unknown`] and a score of 0.
+/// The quality signal of an [`Estimate`]: the localizer's own assessment
+/// ([`crate::mcl::QualityReport`], converted by `From`); a device that computes none sends
+/// [`QualityState::Unknown`] and a score of 0.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Quality {
@@ -95,6 +96,31 @@ pub struct Quality {
     pub state: QualityState,
     /// A score in `[0, 1]` (dimensionless; 1 best), finite.
     pub score: f32,
+}
+
+impl From<crate::mcl::Quality> for QualityState {
+    fn from(q: crate::mcl::Quality) -> Self {
+        match q {
+            crate::mcl::Quality::Tracking => Self::Tracking,
+            crate::mcl::Quality::Uncertain => Self::Uncertain,
+            crate::mcl::Quality::Lost => Self::Lost,
+        }
+    }
+}
+
+impl From<&crate::mcl::QualityReport> for Quality {
+    /// The state, and the report's score (a NaN score, which a report never has, sends 0).
+    fn from(r: &crate::mcl::QualityReport) -> Self {
+        let score = if r.score.is_nan() {
+            0.0
+        } else {
+            r.score.clamp(0.0, 1.0)
+        };
+        Self {
+            state: r.state.into(),
+            score,
+        }
+    }
 }
 
 /// The filter's estimate after a scan (what nav2_amcl publishes on `/amcl_pose`).

@@ -2,6 +2,7 @@
 
 use super::estimate::Estimate;
 use super::motion::OdometryNoise;
+use super::quality::{QualityReport, QualityThresholds, Resetting};
 use crate::pose::Pose;
 
 /// Largest particle capacity: the resampling scratch holds one `u16` count per particle.
@@ -85,13 +86,18 @@ pub struct MclConfig {
     pub(super) retry_drop_nats: f32,
     /// Retry scale of the last odometry step's spread.
     pub(super) retry_scale: f32,
+    /// The quality signal's thresholds.
+    pub(super) quality: QualityThresholds,
+    /// Expansion and free-space resetting, the settle guard; None: off.
+    pub(super) resetting: Option<Resetting>,
 }
 
 impl MclConfig {
     /// - `noise`: the odometry motion model's `odom_alpha1..4`;
-    /// - `resample_ess_fraction` in `[0, 1]`: resample when the effective sample size falls
-    ///   below this fraction of the particle count (1 resamples at every update but a perfectly
-    ///   even one; 0.5 is the usual choice);
+    /// - `resample_ess_fraction` `f` in `[0, 1]`: resample when the effective sample size falls
+    ///   below this fraction of its range `[1, n]` (`ess − 1 < f·(n − 1)`, `n` the particles in
+    ///   use; 1 resamples at every update but a perfectly even one, 0 never; 0.5 is the usual
+    ///   choice). A set with an impossible particle (weight 0) is resampled whatever `f`;
     /// - `recovery_alpha_slow`, `recovery_alpha_fast` in `[0, 1]` (Thrun Table 8.3, AMCL's
     ///   `recovery_alpha_slow/fast`): the decay rates of the long- and short-term averages of
     ///   the measurement likelihood; `0 ≤ slow < fast`, or both 0 to turn recovery off.
@@ -121,7 +127,45 @@ impl MclConfig {
             recovery_alpha_fast,
             retry_drop_nats: f32::INFINITY,
             retry_scale: 1.0,
+            quality: QualityThresholds::DEFAULT,
+            resetting: None,
         })
+    }
+
+    /// The quality signal's thresholds ([`QualityThresholds::DEFAULT`] unless given).
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`QualityThresholds::validate`] refuses them.
+    pub fn with_quality(self, thresholds: QualityThresholds) -> Result<Self, MclError> {
+        if !thresholds.validate() {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self {
+            quality: thresholds,
+            ..self
+        })
+    }
+
+    /// The quality signal's thresholds.
+    pub fn quality(&self) -> &QualityThresholds {
+        &self.quality
+    }
+
+    /// Turns on expansion and free-space resetting and the settle guard ([`Resetting`]; off by
+    /// default, [`Resetting::DEFAULT`] for the documented values); `None` turns them off.
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`Resetting::validate`] refuses the values.
+    pub fn with_resetting(self, resetting: Option<Resetting>) -> Result<Self, MclError> {
+        if resetting.is_some_and(|r| !r.validate()) {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self { resetting, ..self })
+    }
+
+    /// The resetting, when on ([`MclConfig::with_resetting`]).
+    pub fn resetting(&self) -> Option<&Resetting> {
+        self.resetting.as_ref()
     }
 
     /// Turns on the retry (off by default): a second proposal within an update. When an
@@ -138,9 +182,10 @@ impl MclConfig {
     /// robot more often. See `docs/localization.md`.
     ///
     /// # Errors
-    /// [`MclError::BadConfig`] for a NaN `drop_nats` or a `scale` not finite and positive.
+    /// [`MclError::BadConfig`] for a NaN `drop_nats` or a `scale` not positive or above
+    /// [`MAX_RETRY_SCALE`] (`--retry=-inf,1e30` moved every particle to infinity).
     pub fn with_retry(self, drop_nats: f32, scale: f32) -> Result<Self, MclError> {
-        if drop_nats.is_nan() || !(scale.is_finite() && scale > 0.0) {
+        if drop_nats.is_nan() || !(scale > 0.0 && scale <= MAX_RETRY_SCALE) {
             return Err(MclError::BadConfig);
         }
         Ok(Self {
@@ -166,6 +211,10 @@ impl MclConfig {
     }
 }
 
+/// The largest scale of the odometry step's spread the retry takes ([`MclConfig::with_retry`]):
+/// a thousand times the step's own spread is already a global search.
+pub const MAX_RETRY_SCALE: f32 = 1_000.0;
+
 /// The rate of the exponential average of `ln w_avg` that the retry compares each
 /// update with ([`MclConfig::with_retry`]).
 pub const RETRY_LEVEL_RATE: f32 = 0.1;
@@ -189,4 +238,13 @@ pub struct Update {
     /// True when the retry ([`MclConfig::with_retry`]) moved and reweighted the set
     /// at this update (`ln_avg_likelihood` is the first weighing's).
     pub retried: bool,
+    /// The quality signal of this update (from the first weighing, before any retry or
+    /// expansion).
+    pub quality: QualityReport,
+    /// True when expansion resetting ([`MclConfig::with_resetting`]) widened the cloud and
+    /// reweighted it at this update.
+    pub expanded: bool,
+    /// True when this update's resampling was a free-space reset (the particles replaced are
+    /// counted in `injected`).
+    pub reset: bool,
 }

@@ -158,6 +158,11 @@ impl Moments {
         }
     }
 
+    /// The total weight added.
+    pub(super) fn weight(&self) -> f32 {
+        self.w
+    }
+
     /// Adds `p` with weight `w` if it is near the centre.
     #[inline]
     pub(super) fn add_if_near(&mut self, p: &Pose, w: f32) {

@@ -4,6 +4,7 @@
 use super::config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
 use super::estimate::{Estimate, Moments};
 use super::motion::{sample_words, OdometryStep};
+use super::quality::{Quality, QualityReport, QualityState};
 use super::resample::{apply_counts, low_variance_counts_of_total};
 use crate::field::FreeSpace;
 use crate::gaussian::{standard_normal_pair, uniform_f32};
@@ -29,6 +30,11 @@ struct Reweighted {
     sum: f32,
     /// The estimate, with the ESS.
     estimate: Estimate,
+    /// Some particle scored NaN (a NaN or infinite particle, or a NaN score): its weight is 0
+    /// and it must go.
+    impossible: bool,
+    /// The share of the weight near the estimate's centre (0 to 1).
+    concentration: f32,
 }
 
 /// Monte Carlo localization over caller-placed [`Particles`].
@@ -67,6 +73,13 @@ pub struct Mcl<'p, const N: usize> {
     /// The last odometry step's spread for the retry: σ in x and y (metres) and in heading.
     retry_sigma_xy_m: f32,
     retry_sigma_theta_rad: f32,
+    /// The quality signal's averages and its last report.
+    quality_state: QualityState,
+    quality: QualityReport,
+    /// Expansion resets in a row; updates in a row reported `Tracking`, and `Lost`.
+    expansions: u16,
+    tracking_streak: u16,
+    lost_streak: u16,
 }
 
 impl<'p, const N: usize> Mcl<'p, N> {
@@ -93,6 +106,11 @@ impl<'p, const N: usize> Mcl<'p, N> {
             ln_level: f32::NEG_INFINITY,
             retry_sigma_xy_m: 0.0,
             retry_sigma_theta_rad: 0.0,
+            quality_state: QualityState::NEW,
+            quality: QualityReport::default(),
+            expansions: 0,
+            tracking_streak: 0,
+            lost_streak: 0,
         })
     }
 
@@ -118,6 +136,11 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.ln_w_slow = f32::NEG_INFINITY;
         self.ln_w_fast = f32::NEG_INFINITY;
         self.ln_level = f32::NEG_INFINITY;
+        self.quality_state = QualityState::NEW;
+        self.quality = QualityReport::default();
+        self.expansions = 0;
+        self.tracking_streak = 0;
+        self.lost_streak = 0;
         self.estimate = Estimate::of(self.poses(), self.weights());
     }
 
@@ -198,6 +221,12 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// The latest estimate (of the initial set, before any update).
     pub fn estimate(&self) -> &Estimate {
         &self.estimate
+    }
+
+    /// The quality signal of the last update ([`QualityReport`]; the default, `Uncertain`
+    /// with NaN statistics, before the first update after an initialization).
+    pub fn quality(&self) -> &QualityReport {
+        &self.quality
     }
 
     /// The configuration.
@@ -290,8 +319,23 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if scan.prepared().is_empty() {
             return Err(MclError::EmptyScan);
         }
-        let per_beam = 1.0 / scan.prepared().len() as f32;
-        self.update_scaled(|p| scan.score(p).log_likelihood, per_beam, free, rng)
+        let prepared = scan.prepared();
+        let per_beam = 1.0 / prepared.len() as f32;
+        // The quality signal's explained share: one pass over the beams at the estimate.
+        let near_m = self.config.quality.explained_sigmas * prepared.field().params().sigma_hit_m();
+        let explain = |p: &Pose| {
+            let mut explained = 0u32;
+            prepared.score_with(p, |_, d| explained += u32::from(d <= near_m));
+            Some(explained as f32 * per_beam)
+        };
+        // The prepared scan scores a NaN or infinite pose NaN itself: no check per particle.
+        self.update_scaled::<false, _, _, _>(
+            |p| scan.score(p).log_likelihood,
+            per_beam,
+            explain,
+            free,
+            rng,
+        )
     }
 
     /// Reweights by any [`SensorModel`] (e.g. a [`crate::Tempered`] beam model) and finishes the
@@ -338,13 +382,23 @@ impl<'p, const N: usize> Mcl<'p, N> {
         free: Option<&FreeSpace<'_>>,
         rng: &mut R,
     ) -> Result<Update, MclError> {
-        self.update_scaled(log_likelihood, 1.0, free, rng)
+        self.update_scaled::<true, _, _, _>(log_likelihood, 1.0, |_| None, free, rng)
     }
 
-    fn update_scaled<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
+    #[allow(clippy::too_many_lines)]
+    /// The update; `CHECK`: a particle with a NaN or infinite coordinate is made impossible
+    /// here, without asking `log_likelihood` (which may not know it is nowhere); without it,
+    /// the scorer must score such a pose NaN itself (every scorer of the crate does).
+    fn update_scaled<
+        const CHECK: bool,
+        F: FnMut(&Pose) -> f32,
+        E: FnMut(&Pose) -> Option<f32>,
+        R: Rng + ?Sized,
+    >(
         &mut self,
         mut log_likelihood: F,
         recovery_scale: f32,
+        mut explain: E,
         free: Option<&FreeSpace<'_>>,
         rng: &mut R,
     ) -> Result<Update, MclError> {
@@ -352,30 +406,85 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if n == 0 {
             return Err(MclError::NotInitialized);
         }
-        // At most two weighings (the second after a retry), from one call site so that the
-        // score is inlined once.
-        let mut first_ln_avg = None;
+        // At most two weighings (the second after a retry or an expansion), from one call site
+        // so that the score is inlined once.
+        let mut first: Option<(f32, QualityReport)> = None;
         let mut retried = false;
+        let mut expanded = false;
         let rw = loop {
-            let Some(rw) = self.reweight(&mut log_likelihood) else {
+            let Some(rw) = self.reweight::<CHECK, F>(&mut log_likelihood) else {
                 self.reset_weights_only();
                 return Err(MclError::AllImpossible);
             };
-            if first_ln_avg.is_none() {
+            if first.is_none() {
                 // Σ wᵢ p(z|xᵢ) with Σ wᵢ = 1: the prior weights' logs were added, so the
                 // normalizer's total is the average likelihood itself.
-                first_ln_avg = Some(rw.ln_total);
-                if self.config.retry() && self.collapsed(rw.ln_total * recovery_scale) {
+                let ln_beam = rw.ln_total * recovery_scale;
+                let explained = explain(&rw.estimate.pose);
+                let report = self.quality_state.observe(
+                    &self.config.quality,
+                    ln_beam,
+                    explained,
+                    &rw.estimate.covariance,
+                    rw.concentration,
+                );
+                first = Some((rw.ln_total, report));
+                if self.config.retry() && self.collapsed(ln_beam) {
                     self.resample(0, rw.sum, None, rng);
                     self.spread(rng);
                     retried = true;
                     continue;
                 }
+                if let Some(r) = self.config.resetting {
+                    let lost = match explained {
+                        Some(e) => e < r.expand_below,
+                        None => {
+                            report.ln_beam_slow - report.ln_beam_fast
+                                > self.config.quality.lost_drop_nats
+                        }
+                    };
+                    if lost {
+                        let k = self.expansions.min(u16::from(r.max_doublings));
+                        let grow = f32::from(1u16 << k.min(15));
+                        self.expansions = self.expansions.saturating_add(1);
+                        self.resample(0, rw.sum, None, rng);
+                        self.spread_by(grow * r.sigma_m, grow * r.sigma_rad, rng);
+                        expanded = true;
+                        continue;
+                    }
+                    self.expansions = 0;
+                }
             }
             break rw;
         };
-        let ln_avg = first_ln_avg.unwrap_or(rw.ln_total);
-        let random_fraction = self.track_likelihood(ln_avg * recovery_scale);
+        let (ln_avg, report) = first.unwrap_or((rw.ln_total, QualityReport::default()));
+        self.quality = report;
+        let mut random_fraction = self.track_likelihood(ln_avg * recovery_scale);
+        let mut reset = false;
+        if let Some(r) = self.config.resetting {
+            if report.state == Quality::Tracking {
+                self.tracking_streak = self.tracking_streak.saturating_add(1);
+            } else {
+                self.tracking_streak = 0;
+            }
+            if r.settled_after > 0 && self.tracking_streak >= r.settled_after {
+                // The settle guard: no random particles while settled.
+                random_fraction = 0.0;
+            }
+            if report.state == Quality::Lost {
+                self.lost_streak = self.lost_streak.saturating_add(1);
+            } else {
+                self.lost_streak = 0;
+            }
+            if r.reset_after > 0 && self.lost_streak >= r.reset_after && free.is_some() {
+                random_fraction = random_fraction.max(r.reset_fraction);
+                self.lost_streak = 0;
+                // The next expansion starts from the first σ: the fresh particles are not to
+                // be blurred by the widest step.
+                self.expansions = 0;
+                reset = true;
+            }
+        }
         self.estimate = rw.estimate;
         let u = uniform_f32(rng);
         let m = if free.is_some() {
@@ -383,7 +492,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         } else {
             0
         };
-        let due = rw.estimate.ess < self.config.resample_ess_fraction * n as f32 || m > 0;
+        let due = self.resampling_due(rw.estimate.ess, rw.impossible) || m > 0;
         let mut injected = 0u16;
         if due {
             injected = self.resample(m, rw.sum, free, rng);
@@ -402,6 +511,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             resampled: due,
             injected,
             retried,
+            quality: report,
+            expanded,
+            reset: reset && injected > 0,
         })
     }
 
@@ -416,16 +528,19 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// weights need not be). The weights are left unnormalized (`eᵢ`, summing to `S`): the
     /// caller resamples from them or divides them by `S`. None when every particle is
     /// impossible (the weights are then garbage: the caller resets them).
-    fn reweight<F: FnMut(&Pose) -> f32>(&mut self, log_likelihood: &mut F) -> Option<Reweighted> {
+    fn reweight<const CHECK: bool, F: FnMut(&Pose) -> f32>(
+        &mut self,
+        log_likelihood: &mut F,
+    ) -> Option<Reweighted> {
         let n = self.len;
         let uniform = self.uniform;
         let (poses, weights) = (&self.store.poses, &mut self.store.weights);
         // Two loops rather than a test per particle: with uniform weights the prior's log is
         // the same for all and goes into the total below.
-        let (max, best) = if uniform {
-            log_weights::<false, F>(poses, weights, n, log_likelihood)
+        let (max, best, impossible) = if uniform {
+            log_weights::<false, CHECK, F>(poses, weights, n, log_likelihood)
         } else {
-            log_weights::<true, F>(poses, weights, n, log_likelihood)
+            log_weights::<true, CHECK, F>(poses, weights, n, log_likelihood)
         };
         if max == f32::NEG_INFINITY {
             return None;
@@ -450,7 +565,21 @@ impl<'p, const N: usize> Mcl<'p, N> {
             ln_total: max + math::ln(sum) + ln_uniform,
             sum,
             estimate,
+            impossible,
+            concentration: (near.weight() / sum).clamp(0.0, 1.0),
         })
+    }
+
+    /// Whether the set is resampled at this update (recovery aside): when the effective sample
+    /// size `ess` falls below the configured fraction of the way from a degenerate set (ESS 1)
+    /// to an even one (ESS `n`), `ess − 1 < f·(n − 1)`, or when some particle scored NaN (a NaN
+    /// or infinite particle, which must not stay in the set). The ESS of a set is never below 1, so the plain
+    /// `ess < f·n` could never fire for `f·n ≤ 1` (2 particles at `f` = 0.5); for hundreds
+    /// of particles the two differ by half a particle.
+    fn resampling_due(&self, ess: f32, impossible: bool) -> bool {
+        let n = self.len as f32;
+        let f = self.config.resample_ess_fraction;
+        impossible || (f > 0.0 && ess - 1.0 < f * (n - 1.0))
     }
 
     fn reset_weights_only(&mut self) {
@@ -484,7 +613,16 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// the retry's second proposal. Two [`standard_normal_pair`]s per particle.
     fn spread<R: Rng + ?Sized>(&mut self, rng: &mut R) {
         let k = self.config.retry_scale;
-        let (s_xy, s_theta) = (k * self.retry_sigma_xy_m, k * self.retry_sigma_theta_rad);
+        self.spread_by(
+            k * self.retry_sigma_xy_m,
+            k * self.retry_sigma_theta_rad,
+            rng,
+        );
+    }
+
+    /// Moves every particle by a normal step of σ `s_xy` (metres, x and y) and `s_theta`
+    /// (radians). Two [`standard_normal_pair`]s per particle.
+    fn spread_by<R: Rng + ?Sized>(&mut self, s_xy: f32, s_theta: f32, rng: &mut R) {
         for p in self.store.poses.iter_mut().take(self.len) {
             let (a, b) = standard_normal_pair(rng);
             let (c, _) = standard_normal_pair(rng);
@@ -552,22 +690,32 @@ impl<'p, const N: usize> Mcl<'p, N> {
 }
 
 /// Pass 1 of [`Mcl::reweight`]: `wᵢ ← ln p(z | xᵢ)` (plus `ln wᵢ` when `PRIOR`) for the first
-/// `n` particles, a NaN log-likelihood counting as `−∞` and `+∞` clamped to `f32::MAX`; returns
-/// the largest and its index (the first on ties).
+/// `n` particles, a NaN log-likelihood (and, with `CHECK`, a particle with a NaN or infinite
+/// coordinate) counting as `−∞` and `+∞` clamped to `f32::MAX`; returns the largest, its
+/// index (the first on ties), and whether some score was NaN.
 #[inline]
-fn log_weights<const PRIOR: bool, F: FnMut(&Pose) -> f32>(
+fn log_weights<const PRIOR: bool, const CHECK: bool, F: FnMut(&Pose) -> f32>(
     poses: &[Pose],
     weights: &mut [f32],
     n: usize,
     log_likelihood: &mut F,
-) -> (f32, usize) {
+) -> (f32, usize, bool) {
     let mut max = f32::NEG_INFINITY;
     let mut best = 0usize;
+    let mut nan = false;
     for (i, (p, w)) in poses.iter().zip(weights.iter_mut()).take(n).enumerate() {
-        let l = log_likelihood(p);
+        // A particle with a NaN or infinite coordinate is nowhere: impossible, whatever the
+        // scorer would say (it is not asked).
+        let l = if !CHECK || p.is_finite() {
+            log_likelihood(p)
+        } else {
+            f32::NAN
+        };
         let l = if l <= f32::MAX {
             l
         } else if l.is_nan() {
+            // Off the hot path: only NaN scores (a NaN or infinite particle) come here.
+            nan = true;
             f32::NEG_INFINITY
         } else {
             f32::MAX
@@ -579,7 +727,7 @@ fn log_weights<const PRIOR: bool, F: FnMut(&Pose) -> f32>(
             best = i;
         }
     }
-    (max, best)
+    (max, best, nan)
 }
 
 #[cfg(test)]
@@ -594,7 +742,9 @@ mod tests {
     #[test]
     fn eighteen_bytes_per_particle() {
         assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
-        assert!(core::mem::size_of::<Mcl<'_, 1000>>() <= 128);
+        let fixed = core::mem::size_of::<Mcl<'_, 1000>>();
+        assert!(fixed <= 272, "{fixed}");
+        println!("Mcl: {fixed} bytes besides the particles");
     }
 
     #[test]
@@ -703,12 +853,15 @@ mod tests {
         assert!(!c.retry());
         assert!(c.with_retry(0.1, 0.5).unwrap().retry());
         assert!(c.with_retry(f32::NEG_INFINITY, 2.0).unwrap().retry());
+        assert!(c.with_retry(0.1, crate::mcl::MAX_RETRY_SCALE).is_ok());
         assert!(!c.with_retry(f32::INFINITY, 1.0).unwrap().retry());
         for (d, k) in [
             (f32::NAN, 1.0),
             (0.1, 0.0),
             (0.1, -1.0),
             (0.1, f32::INFINITY),
+            (f32::NEG_INFINITY, 1e30),
+            (0.1, 1_000.5),
         ] {
             assert_eq!(
                 c.with_retry(d, k).err(),

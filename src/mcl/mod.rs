@@ -13,11 +13,16 @@
 //!   [`FreeSpace`](crate::field::FreeSpace) section, uniform and Gaussian initialization.
 //! - [`odometry`]: differential-drive odometry from encoder ticks ([`odometry::DiffDrive`]),
 //!   exact arc integration, wrapping counters.
+//! - [`quality`]: the localization-quality signal ([`Quality`]: tracking, uncertain, lost)
+//!   reported by every update, and the recovery it drives in fixed memory ([`Resetting`]:
+//!   expansion resetting, free-space resetting, the settle guard).
 //! - [`rng`]: [`SplitMix64`] (the filter's) and [`XorShift64`] (the randomized checks'), seeded
 //!   generators the host and the device run identically.
 //!
 //! Memory: 18 bytes per particle of capacity (pose 12, weight 4, resampling count 2) in
-//! [`Particles`], plus a fixed ~80 bytes in [`Mcl`]. See `docs/localization.md` for the
+//! [`Particles`], plus a fixed 264 bytes (on a 64-bit host; less on a 32-bit target) in [`Mcl`]
+//! (the configuration, the recovery and quality
+//! averages, the last estimate and quality report). See `docs/localization.md` for the
 //! measurements on the Intel lab log.
 
 pub mod config;
@@ -26,11 +31,18 @@ pub mod filter;
 pub mod motion;
 pub mod normal;
 pub mod odometry;
+pub mod quality;
 pub mod resample;
 pub mod rng;
 
-pub use config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
+pub use config::{
+    MclConfig, MclError, Particles, Update, MAX_PARTICLES, MAX_RETRY_SCALE, RETRY_LEVEL_RATE,
+};
 pub use estimate::Estimate;
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
-pub use motion::{MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M};
+pub use motion::{
+    MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M, MAX_ALPHA, MAX_STEP_M,
+    MAX_STEP_ROTATION_RAD,
+};
+pub use quality::{Quality, QualityReport, QualityThresholds, Resetting};
 pub use rng::{SplitMix64, XorShift64};

@@ -35,12 +35,30 @@ use rand_core::Rng;
 /// Translations below this (metres) are in-place turns: `δrot1 = 0`, the whole turn is `δrot2`.
 pub const IN_PLACE_TURN_M: f32 = 0.01;
 
+/// The longest odometry step the motion model takes, metres (`|δtrans|`, forward or reversing):
+/// 1 km. The f32 spacing there is 61 µm, so a step this long still carries its own noise, and
+/// with every `odom_alpha` at most [`MAX_ALPHA`] each sampled variance stays below 10¹³ and the
+/// moved particles finite. A longer step (an encoder reset, a corrupted message, a unit error)
+/// is [`MotionError::StepTooLarge`].
+pub const MAX_STEP_M: f32 = 1_000.0;
+
+/// The largest rotation of an odometry step the motion model takes, radians (`|δrot1|`,
+/// `|δrot2|`): 1,000 rad (about 159 turns; f32 spacing 61 µrad). [`OdometryStep::between`]
+/// wraps both rotations into `[−π, π)`; only [`OdometryStep::new`] can be given more.
+pub const MAX_STEP_ROTATION_RAD: f32 = 1_000.0;
+
+/// The largest `odom_alpha` coefficient [`OdometryNoise::new`] accepts: 10⁶ (a standard
+/// deviation a thousand times the motion; AMCL's defaults are 0.2). Larger ones overflow the
+/// variances of long steps.
+pub const MAX_ALPHA: f32 = 1.0e6;
+
 /// Errors building an odometry noise model or step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum MotionError {
-    /// A noise coefficient is NaN, infinite or negative (its index, 1 to 4).
+    /// A noise coefficient is NaN, infinite, negative or above [`MAX_ALPHA`] (its index, 1 to
+    /// 4).
     BadAlpha(u8),
     /// An odometry pose or step has a NaN or infinite coordinate.
     NonFiniteOdometry,
@@ -49,6 +67,9 @@ pub enum MotionError {
     /// A wheel travelled more than the differential drive's maximum in one step
     /// ([`super::odometry::DiffDrive::step`]).
     StepTooLong,
+    /// An odometry step's translation is beyond [`MAX_STEP_M`] or a rotation beyond
+    /// [`MAX_STEP_ROTATION_RAD`]: more than the motion model can represent.
+    StepTooLarge,
 }
 
 impl core::fmt::Display for MotionError {
@@ -58,6 +79,7 @@ impl core::fmt::Display for MotionError {
             Self::NonFiniteOdometry => f.write_str("odometry is not finite"),
             Self::BadDiffDrive(p) => write!(f, "differential drive: {p}"),
             Self::StepTooLong => f.write_str("wheel travel over the maximum per step"),
+            Self::StepTooLarge => f.write_str("odometry step beyond the motion model's range"),
         }
     }
 }
@@ -77,11 +99,12 @@ impl OdometryNoise {
     /// `odom_alpha3` (translation from translation), `odom_alpha4` (translation from rotation).
     ///
     /// # Errors
-    /// [`MotionError::BadAlpha`] for a NaN, infinite or negative coefficient.
+    /// [`MotionError::BadAlpha`] for a NaN, negative or infinite coefficient, or one above
+    /// [`MAX_ALPHA`].
     pub fn new(alpha1: f32, alpha2: f32, alpha3: f32, alpha4: f32) -> Result<Self, MotionError> {
         let alpha = [alpha1, alpha2, alpha3, alpha4];
         for (i, a) in (1u8..).zip(alpha) {
-            if !(a.is_finite() && a >= 0.0) {
+            if !(0.0..=MAX_ALPHA).contains(&a) {
                 return Err(MotionError::BadAlpha(i));
             }
         }
@@ -203,7 +226,8 @@ impl OdometryStep {
     ///
     /// # Errors
     /// [`MotionError::NonFiniteOdometry`] when a coordinate of either pose is NaN or infinite,
-    /// or the step itself overflows.
+    /// or the step itself overflows; [`MotionError::StepTooLarge`] when the poses are more than
+    /// [`MAX_STEP_M`] apart.
     pub fn between(previous: &Pose, current: &Pose) -> Result<Self, MotionError> {
         if !(previous.is_finite() && current.is_finite()) {
             return Err(MotionError::NonFiniteOdometry);
@@ -224,10 +248,18 @@ impl OdometryStep {
     /// A step from its three parts. A negative `trans_m` is a reversing step.
     ///
     /// # Errors
-    /// [`MotionError::NonFiniteOdometry`] for a NaN or infinite part.
+    /// [`MotionError::NonFiniteOdometry`] for a NaN or infinite part;
+    /// [`MotionError::StepTooLarge`] for `|trans_m|` above [`MAX_STEP_M`] or a rotation above
+    /// [`MAX_STEP_ROTATION_RAD`] in magnitude.
     pub fn new(rot1_rad: f32, trans_m: f32, rot2_rad: f32) -> Result<Self, MotionError> {
         if !(rot1_rad.is_finite() && trans_m.is_finite() && rot2_rad.is_finite()) {
             return Err(MotionError::NonFiniteOdometry);
+        }
+        if trans_m.abs() > MAX_STEP_M
+            || rot1_rad.abs() > MAX_STEP_ROTATION_RAD
+            || rot2_rad.abs() > MAX_STEP_ROTATION_RAD
+        {
+            return Err(MotionError::StepTooLarge);
         }
         Ok(Self {
             rot1_rad,
@@ -324,6 +356,47 @@ mod tests {
             OdometryStep::between(&Pose::new(-3e38, 0.0, 0.0), &Pose::new(3e38, 0.0, 0.0)),
             Err(MotionError::NonFiniteOdometry)
         );
+    }
+
+    #[test]
+    fn steps_beyond_the_model_are_typed_errors() {
+        // 1e20 m: its variance overflows f32 and one prediction made every particle NaN.
+        assert_eq!(
+            OdometryStep::new(0.0, 1e20, 0.0),
+            Err(MotionError::StepTooLarge)
+        );
+        assert_eq!(
+            OdometryStep::new(0.0, -1_000.5, 0.0),
+            Err(MotionError::StepTooLarge)
+        );
+        assert_eq!(
+            OdometryStep::new(1e4, 0.0, 0.0),
+            Err(MotionError::StepTooLarge)
+        );
+        assert_eq!(
+            OdometryStep::new(0.0, 0.0, -1e4),
+            Err(MotionError::StepTooLarge)
+        );
+        assert!(OdometryStep::new(-MAX_STEP_ROTATION_RAD, MAX_STEP_M, 3.0).is_ok());
+        assert_eq!(
+            OdometryStep::between(&Pose::new(0.0, 0.0, 0.0), &Pose::new(800.0, 800.0, 0.0)),
+            Err(MotionError::StepTooLarge)
+        );
+        assert_eq!(
+            OdometryNoise::new(0.0, 0.0, 1e30, 0.0),
+            Err(MotionError::BadAlpha(3))
+        );
+        // The largest step with the largest noise still moves every sample to a finite pose.
+        let noise = OdometryNoise::uniform(MAX_ALPHA).unwrap();
+        let step = OdometryStep::new(MAX_STEP_ROTATION_RAD, -MAX_STEP_M, 2.0).unwrap();
+        let (a, b, c) = noise.sigmas(&step);
+        assert!(a.is_finite() && b.is_finite() && c.is_finite());
+        let mut rng = SplitMix::new(5);
+        let mut p = Pose::new(1e5, -1e5, 0.0);
+        for _ in 0..1000 {
+            p = noise.sample(&p, &step, &mut rng);
+            assert!(p.is_finite(), "{p:?}");
+        }
     }
 
     #[test]

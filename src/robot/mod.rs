@@ -880,7 +880,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             &e,
             rev.t_us,
             flags,
-            Quality::default(),
+            Quality::from(&update.quality),
             odometry,
         ))
     }

@@ -242,7 +242,24 @@ fn tracks_the_path_and_sends_one_estimate_per_revolution() {
         assert!(wrap_angle(e.pose.theta_rad - p.theta_rad).abs() < 0.03);
         assert!(e.flags.contains(EstimateFlags::INITIALIZED));
         assert!(!e.flags.contains(EstimateFlags::ODOMETRY_STALE));
+        // The localizer's own assessment, not "not assessed".
+        assert_ne!(e.quality.state, link::QualityState::Unknown);
+        assert!(
+            e.quality.score > 0.0 && e.quality.score <= 1.0,
+            "{:?}",
+            e.quality
+        );
     }
+    // Tracking a clean synthetic room: the signal says so once the averages have settled.
+    let tracking = est
+        .iter()
+        .filter(|e| e.quality.state == link::QualityState::Tracking)
+        .count();
+    assert!(
+        tracking * 10 >= est.len() * 8,
+        "{tracking} of {}",
+        est.len()
+    );
     let heartbeats = out
         .frames
         .iter()

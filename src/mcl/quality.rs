@@ -1,0 +1,438 @@
+//! The localization-quality signal: after every update, from what the filter already knows,
+//! whether it follows the robot ([`Quality::Tracking`]), doubts it ([`Quality::Uncertain`]) or
+//! has lost it ([`Quality::Lost`]); and the recovery it drives (expansion resetting, then
+//! free-space resetting, [`Resetting`]).
+//!
+//! # Inputs (no extra work per beam in the particle loop)
+//! - **The share of beams the map explains** at the estimate: the beams whose endpoint, with the
+//!   robot at the estimate, lies within [`QualityThresholds::explained_sigmas`] × σ_hit of an
+//!   obstacle. One more pass over the scan's beams per update (not per particle), with
+//!   [`Mcl::update_prepared`](super::Mcl::update_prepared) only; the other updates have none.
+//!   Averaged over the updates with rate [`EXPLAINED_RATE`] (about the last two scans).
+//! - **The likelihood per beam**: `ln w_avg / beams` (nats per scored beam, tempered as scored:
+//!   the value the augmented-MCL recovery already follows), its fast and slow exponential
+//!   averages (rates [`LIKELIHOOD_FAST_RATE`], [`LIKELIHOOD_SLOW_RATE`], as AMCL's
+//!   `recovery_alpha_fast/slow` but on the logarithm). The drop `slow − fast` (nats per beam)
+//!   says the recent scans fit worse than the usual ones.
+//! - **The spread**: the standard deviations of the estimate (metres, the larger of x and y;
+//!   radians) and the share of the weight within [`ESTIMATE_RADIUS_M`](super::ESTIMATE_RADIUS_M)
+//!   of the heaviest particle (the concentration; a cloud split in two places has little).
+//!
+//! # Decision ([`QualityThresholds`], defaults in brackets)
+//! With the explained share `e` (its average):
+//! - `Lost` when `e < lost_explained` [0.35], or when `e < lost_explained_dropping` [0.5] and
+//!   the likelihood per beam has dropped by more than `dropping_nats` [0.25 nats per beam];
+//! - `Uncertain` when `e < tracking_explained` [0.65], or the spread is above `spread_m` [0.25 m]
+//!   or `spread_rad` [0.15 rad], or the concentration is below `concentration` [0.5];
+//! - `Tracking` otherwise;
+//!
+//! and a `Lost` only after `lost_after` (2) updates in a row that meet one of its conditions
+//! (`Uncertain` until then).
+//!
+//! Without it (updates by a model or a closure), the drop stands in for `e`: `Lost` above
+//! `lost_drop_nats` [1.0 nats, in the units of the scores given], `Uncertain` above `uncertain_drop_nats` [0.3]; a
+//! filter lost for long enough that the slow average has caught up then reads as tracking,
+//! which the explained share does not.
+//!
+//! The quality score sent with it is the averaged explained share (1 − the drop, clamped to
+//! `[0, 1]`, without it).
+//!
+//! The thresholds were chosen on the first two thirds of the Intel lab log and checked on the
+//! last third (docs/localization.md, `host-tests/tests/intel_quality.rs`).
+
+/// The rate of the averaged explained share (per update): `e ← e + r·(eₖ − e)`.
+pub const EXPLAINED_RATE: f32 = 0.5;
+/// The fast average's rate of the likelihood per beam (per update).
+pub const LIKELIHOOD_FAST_RATE: f32 = 0.3;
+/// The slow average's rate of the likelihood per beam (per update).
+pub const LIKELIHOOD_SLOW_RATE: f32 = 0.02;
+
+/// What the filter thinks of its own estimate after an update.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Quality {
+    /// The estimate follows the robot: the map explains the scan there and the cloud is tight.
+    Tracking,
+    /// The scan fits only partly, or the cloud is wide or split (also before the first update).
+    #[default]
+    Uncertain,
+    /// The map does not explain the scan at the estimate: the filter has lost the robot.
+    Lost,
+}
+
+/// The thresholds of the decision (see the module docs). Validated by
+/// [`QualityThresholds::validate`] when given to [`MclConfig::with_quality`](super::MclConfig::with_quality).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct QualityThresholds {
+    /// A beam is explained when its endpoint lies within this many σ_hit of an obstacle
+    /// (dimensionless, > 0).
+    pub explained_sigmas: f32,
+    /// Averaged explained share (0 to 1) below which the state is `Uncertain`.
+    pub tracking_explained: f32,
+    /// Averaged explained share (0 to 1) below which the state is `Lost`.
+    pub lost_explained: f32,
+    /// Averaged explained share (0 to 1) below which the state is `Lost` when the likelihood
+    /// per beam is also dropping by more than `dropping_nats` (a kidnapping into a place the
+    /// map half explains).
+    pub lost_explained_dropping: f32,
+    /// The drop of the likelihood per beam (`slow − fast`, nats per beam) that, with
+    /// `lost_explained_dropping`, is `Lost`.
+    pub dropping_nats: f32,
+    /// Updates in a row that meet a `Lost` condition before the state is `Lost` (they report
+    /// `Uncertain` until then; at least 1): a scan or two the map explains poorly while the
+    /// estimate is right (a doorway, people) is not a loss.
+    pub lost_after: u8,
+    /// Estimate standard deviation (metres) above which the state is at best `Uncertain`.
+    pub spread_m: f32,
+    /// Heading standard deviation (radians) above which the state is at best `Uncertain`.
+    pub spread_rad: f32,
+    /// Share of the weight near the estimate (0 to 1) below which the state is at best
+    /// `Uncertain`.
+    pub concentration: f32,
+    /// Without an explained share: drop of the likelihood (nats, in the units of the scores
+    /// given: per beam for [`Mcl::update_prepared`](super::Mcl::update_prepared), per scan for
+    /// closures and models) above which the state is `Uncertain`.
+    pub uncertain_drop_nats: f32,
+    /// Without an explained share: drop (nats, as `uncertain_drop_nats`) above which the state
+    /// is `Lost`.
+    pub lost_drop_nats: f32,
+}
+
+impl QualityThresholds {
+    /// The defaults (module docs).
+    pub const DEFAULT: Self = Self {
+        explained_sigmas: 3.0,
+        tracking_explained: 0.65,
+        lost_explained: 0.35,
+        lost_explained_dropping: 0.5,
+        dropping_nats: 0.25,
+        lost_after: 2,
+        spread_m: 0.25,
+        spread_rad: 0.15,
+        concentration: 0.5,
+        uncertain_drop_nats: 0.3,
+        lost_drop_nats: 1.0,
+    };
+
+    /// True when every value is in range: shares in `[0, 1]` with `lost ≤ tracking`, the rest
+    /// positive (not NaN), `uncertain_drop ≤ lost_drop`.
+    pub fn validate(&self) -> bool {
+        let unit = |v: f32| (0.0..=1.0).contains(&v);
+        let pos = |v: f32| v > 0.0 && !v.is_nan();
+        unit(self.tracking_explained)
+            && unit(self.lost_explained)
+            && self.lost_explained <= self.tracking_explained
+            && unit(self.lost_explained_dropping)
+            && pos(self.dropping_nats)
+            && self.lost_after >= 1
+            && unit(self.concentration)
+            && pos(self.explained_sigmas)
+            && pos(self.spread_m)
+            && pos(self.spread_rad)
+            && pos(self.uncertain_drop_nats)
+            && pos(self.lost_drop_nats)
+            && self.uncertain_drop_nats <= self.lost_drop_nats
+    }
+}
+
+impl Default for QualityThresholds {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The quality signal of one update ([`Update::quality`](super::Update::quality),
+/// [`Mcl::quality`](super::Mcl::quality)).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct QualityReport {
+    /// The decision.
+    pub state: Quality,
+    /// A score in `[0, 1]` (1 best): the averaged explained share, or `1 − drop` without it.
+    pub score: f32,
+    /// Share of this scan's beams the map explains at the estimate (0 to 1); NaN when the
+    /// update had no scan to measure it on (a model or closure update).
+    pub explained: f32,
+    /// Its average over the updates (rate [`EXPLAINED_RATE`]); NaN before the first measured.
+    pub explained_avg: f32,
+    /// This update's likelihood per beam, `ln w_avg / beams`, nats.
+    pub ln_beam: f32,
+    /// Its fast average (rate [`LIKELIHOOD_FAST_RATE`]), nats.
+    pub ln_beam_fast: f32,
+    /// Its slow average (rate [`LIKELIHOOD_SLOW_RATE`]), nats.
+    pub ln_beam_slow: f32,
+    /// The estimate's standard deviation in position (the larger of x and y), metres.
+    pub spread_m: f32,
+    /// The estimate's standard deviation in heading, radians.
+    pub spread_rad: f32,
+    /// Share of the weight within the estimate's neighbourhood (0 to 1).
+    pub concentration: f32,
+}
+
+/// The running averages behind the signal (in [`Mcl`](super::Mcl)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct QualityState {
+    explained_avg: f32,
+    fast: f32,
+    slow: f32,
+    /// Updates in a row that met a `Lost` condition.
+    lost_conditions: u8,
+}
+
+impl QualityState {
+    pub(super) const NEW: Self = Self {
+        explained_avg: f32::NAN,
+        fast: f32::NAN,
+        slow: f32::NAN,
+        lost_conditions: 0,
+    };
+
+    /// Folds one update in and decides.
+    pub(super) fn observe(
+        &mut self,
+        t: &QualityThresholds,
+        ln_beam: f32,
+        explained: Option<f32>,
+        covariance: &[[f32; 3]; 3],
+        concentration: f32,
+    ) -> QualityReport {
+        let follow = |avg: f32, v: f32, rate: f32| {
+            if !v.is_finite() {
+                avg
+            } else if avg.is_nan() {
+                v
+            } else {
+                avg + rate * (v - avg)
+            }
+        };
+        self.fast = follow(self.fast, ln_beam, LIKELIHOOD_FAST_RATE);
+        self.slow = follow(self.slow, ln_beam, LIKELIHOOD_SLOW_RATE);
+        let e = explained.unwrap_or(f32::NAN);
+        self.explained_avg = follow(self.explained_avg, e, EXPLAINED_RATE);
+        let var = |i: usize| {
+            covariance
+                .get(i)
+                .and_then(|r| r.get(i))
+                .copied()
+                .unwrap_or(0.0)
+                .max(0.0)
+        };
+        let spread_m = crate::math::sqrt(var(0).max(var(1)));
+        let spread_rad = crate::math::sqrt(var(2));
+        let wide = !(spread_m <= t.spread_m
+            && spread_rad <= t.spread_rad
+            && concentration >= t.concentration);
+        let drop = if self.slow.is_finite() && self.fast.is_finite() {
+            (self.slow - self.fast).max(0.0)
+        } else {
+            0.0
+        };
+        let (state, score) = if explained.is_some() && !self.explained_avg.is_nan() {
+            let a = self.explained_avg;
+            let state = if a < t.lost_explained
+                || (a < t.lost_explained_dropping && drop > t.dropping_nats)
+            {
+                Quality::Lost
+            } else if a < t.tracking_explained || wide {
+                Quality::Uncertain
+            } else {
+                Quality::Tracking
+            };
+            (state, a.clamp(0.0, 1.0))
+        } else {
+            let state = if drop > t.lost_drop_nats {
+                Quality::Lost
+            } else if drop > t.uncertain_drop_nats || wide {
+                Quality::Uncertain
+            } else {
+                Quality::Tracking
+            };
+            (state, (1.0 - drop).clamp(0.0, 1.0))
+        };
+        let state = if state == Quality::Lost {
+            self.lost_conditions = self.lost_conditions.saturating_add(1);
+            if self.lost_conditions >= t.lost_after {
+                Quality::Lost
+            } else {
+                Quality::Uncertain
+            }
+        } else {
+            self.lost_conditions = 0;
+            state
+        };
+        QualityReport {
+            state,
+            score,
+            explained: e,
+            explained_avg: self.explained_avg,
+            ln_beam,
+            ln_beam_fast: self.fast,
+            ln_beam_slow: self.slow,
+            spread_m,
+            spread_rad,
+            concentration,
+        }
+    }
+}
+
+/// Recovery in fixed memory, driven by the quality signal ([`MclConfig::with_resetting`](super::MclConfig::with_resetting);
+/// off unless given).
+///
+/// **Expansion resetting** (Ueda et al., IROS 2004, as in emcl2): when this scan's explained
+/// share at the estimate is below [`Resetting::expand_below`] (or, without it, the likelihood
+/// drop is above the `lost_drop_nats` threshold), the cloud no longer covers the robot: the
+/// update resamples the set by the weights it has, moves every particle by a normal step of
+/// σ [`Resetting::sigma_m`] (x and y) and [`Resetting::sigma_rad`] (heading), and weighs it
+/// again by the same scan (one more scoring pass, at those updates only). Same particle count,
+/// in place. Each further expansion in a row doubles the σ, up to 2^[`Resetting::max_doublings`]
+/// times.
+///
+/// **Free-space resetting**, the last resort: after [`Resetting::reset_after`] updates in a row
+/// that reported [`Quality::Lost`] (expansion has not found the robot), the update replaces the
+/// share [`Resetting::reset_fraction`] of the set by poses uniform over the
+/// [`FreeSpace`](crate::field::FreeSpace) passed to the update (none without one), and the
+/// count starts again, as does the expansions' σ.
+///
+/// **Settle guard**: while the quality has been `Tracking` for [`Resetting::settled_after`]
+/// updates in a row, augmented MCL (Table 8.3) injects no random particles (a random particle
+/// winning one scan is how a settled filter gets hijacked); the guard lifts at the first update
+/// that is not `Tracking`. 0 turns the guard off.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Resetting {
+    /// Explained share (0 to 1) of one scan below which the cloud is expanded.
+    pub expand_below: f32,
+    /// σ of the first expansion in x and y, metres.
+    pub sigma_m: f32,
+    /// σ of the first expansion in heading, radians.
+    pub sigma_rad: f32,
+    /// How many times the σ doubles over expansions in a row.
+    pub max_doublings: u8,
+    /// Updates in a row reported `Lost` before a free-space reset (0: never reset).
+    pub reset_after: u16,
+    /// Share of the particles a free-space reset replaces (0 to 1).
+    pub reset_fraction: f32,
+    /// Updates in a row of `Tracking` after which random injections stop (0: no guard).
+    pub settled_after: u16,
+}
+
+impl Resetting {
+    /// The defaults: expand below 0.4 explained, σ 0.1 m and 0.05 rad doubling up to 8 times
+    /// as much (0.8 m, 0.4 rad), a free-space reset of the whole set after 5 updates in a row
+    /// reported `Lost`, the settle guard after 20 updates of `Tracking`.
+    pub const DEFAULT: Self = Self {
+        expand_below: 0.4,
+        sigma_m: 0.1,
+        sigma_rad: 0.05,
+        max_doublings: 3,
+        reset_after: 5,
+        reset_fraction: 1.0,
+        settled_after: 20,
+    };
+
+    /// True when every value is in range: shares in `[0, 1]`, σ finite and positive,
+    /// `max_doublings ≤ 16`.
+    pub fn validate(&self) -> bool {
+        let unit = |v: f32| (0.0..=1.0).contains(&v);
+        let pos = |v: f32| v.is_finite() && v > 0.0;
+        unit(self.expand_below)
+            && unit(self.reset_fraction)
+            && pos(self.sigma_m)
+            && pos(self.sigma_rad)
+            && self.max_doublings <= 16
+    }
+}
+
+impl Default for Resetting {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TIGHT: [[f32; 3]; 3] = [[1e-4, 0.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1e-4]];
+
+    #[test]
+    fn defaults_validate_and_bad_values_do_not() {
+        assert!(QualityThresholds::DEFAULT.validate());
+        assert!(Resetting::DEFAULT.validate());
+        let t = QualityThresholds {
+            lost_explained: 0.9,
+            ..QualityThresholds::DEFAULT
+        };
+        assert!(!t.validate());
+        let t = QualityThresholds {
+            dropping_nats: f32::NAN,
+            ..QualityThresholds::DEFAULT
+        };
+        assert!(!t.validate());
+        let t = QualityThresholds {
+            lost_after: 0,
+            ..QualityThresholds::DEFAULT
+        };
+        assert!(!t.validate());
+        let r = Resetting {
+            sigma_m: f32::INFINITY,
+            ..Resetting::DEFAULT
+        };
+        assert!(!r.validate());
+    }
+
+    #[test]
+    fn explained_share_decides_with_hysteresis() {
+        let t = QualityThresholds::DEFAULT;
+        let mut q = QualityState::NEW;
+        for _ in 0..5 {
+            let r = q.observe(&t, -1.0, Some(0.95), &TIGHT, 1.0);
+            assert_eq!(r.state, Quality::Tracking);
+            assert!((r.score - 0.95).abs() < 1e-3);
+        }
+        // One scan the map barely explains: the average dips, one update meets a Lost
+        // condition, reported Uncertain (hysteresis).
+        let r = q.observe(&t, -1.0, Some(0.0), &TIGHT, 1.0);
+        assert_eq!(r.state, Quality::Uncertain, "{r:?}");
+        let r = q.observe(&t, -1.0, Some(0.95), &TIGHT, 1.0);
+        assert_ne!(r.state, Quality::Lost, "{r:?}");
+        // A lasting loss.
+        let mut last = Quality::Tracking;
+        for _ in 0..4 {
+            last = q.observe(&t, -3.0, Some(0.1), &TIGHT, 1.0).state;
+        }
+        assert_eq!(last, Quality::Lost);
+        // A wide cloud is at best uncertain.
+        let mut q = QualityState::NEW;
+        let wide = [[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1e-4]];
+        assert_eq!(
+            q.observe(&t, -1.0, Some(0.95), &wide, 1.0).state,
+            Quality::Uncertain
+        );
+        assert_eq!(
+            q.observe(&t, -1.0, Some(0.95), &TIGHT, 0.2).state,
+            Quality::Uncertain
+        );
+    }
+
+    #[test]
+    fn without_a_scan_the_likelihood_drop_decides() {
+        let t = QualityThresholds::DEFAULT;
+        let mut q = QualityState::NEW;
+        for _ in 0..50 {
+            assert_eq!(
+                q.observe(&t, -100.0, None, &TIGHT, 1.0).state,
+                Quality::Tracking
+            );
+        }
+        let mut states = [Quality::Tracking; 3];
+        for s in &mut states {
+            *s = q.observe(&t, -110.0, None, &TIGHT, 1.0).state;
+        }
+        // Lost from the second update that meets the condition (`lost_after` 2).
+        assert_eq!(states, [Quality::Uncertain, Quality::Lost, Quality::Lost]);
+        let r = q.observe(&t, f32::NAN, None, &TIGHT, 1.0);
+        assert!(r.score.is_finite() && (0.0..=1.0).contains(&r.score));
+    }
+}
