@@ -22,11 +22,11 @@ use beamfield::mcl::{
     SplitMix64,
 };
 use beamfield::{wrap_angle, Pose, Scan, SensorMount, Tempered};
-use beamfield_tools::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::field_cmd::{build_blob, build_free_space};
-use beamfield_tools::map::OccupancyMap;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
+use beamfield_tools::blob::{build_blob, build_free_space};
+use beamfield_tools::input::map::OccupancyMap;
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
-use beamfield_tools::score_cmd::MAX_BEAMS;
+use beamfield_tools::cmd::scored_log::MAX_BEAMS;
 use beamfield_tools::track::TrackInput;
 use host_tests::wheel_odometry::{wheel_odometry, WheelErrors};
 

@@ -147,14 +147,14 @@ mod tests {
         let mut d = vec![
             0, 1, 0, 0, 7, 0, 0, 0, 5, 0, 0, 0, 3, 0, 0, 0, b'a', b'b', 0,
         ];
-        d.extend([0; 5]); // to offset 24 (a multiple of 8 after the header)
+        d.push(0); // the string ends at body offset 15: one byte to 16, a multiple of 8
         d.extend(1.5f64.to_le_bytes());
         let mut c = Cdr::new(&d).unwrap();
         assert_eq!(c.u8().unwrap(), 7);
         assert_eq!(c.u32().unwrap(), 5);
         assert_eq!(c.string().unwrap(), "ab");
         assert_eq!(c.f64().unwrap(), 1.5);
-        assert_eq!(c.u8(), Err(CdrError::Truncated { at: 32 }));
+        assert_eq!(c.u8(), Err(CdrError::Truncated { at: 24 }));
         assert!(matches!(
             Cdr::new(&[0, 7, 0, 0]),
             Err(CdrError::Encapsulation([0, 7]))
