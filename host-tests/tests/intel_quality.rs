@@ -22,11 +22,11 @@ use beamfield::mcl::{
     SplitMix64,
 };
 use beamfield::{wrap_angle, Pose, Scan, SensorMount, Tempered};
-use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::blob::{build_blob, build_free_space};
+use beamfield_tools::cmd::scored_log::MAX_BEAMS;
+use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
 use beamfield_tools::input::map::OccupancyMap;
 use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
-use beamfield_tools::cmd::scored_log::MAX_BEAMS;
 use beamfield_tools::track::TrackInput;
 use host_tests::wheel_odometry::{wheel_odometry, WheelErrors};
 
@@ -62,6 +62,7 @@ fn intel_input() -> TrackInput {
         layout: log.layout_with_mount(SensorMount::CENTERED).unwrap(),
         scans: log.scans.iter().map(|s| s.ranges_m.clone()).collect(),
         logged: log.scans.iter().map(|s| s.pose).collect::<Vec<Pose>>(),
+        odometry: None,
     }
 }
 

@@ -35,6 +35,7 @@ fn intel_input() -> TrackInput {
         layout: log.layout_with_mount(SensorMount::CENTERED).unwrap(),
         scans: log.scans.iter().map(|s| s.ranges_m.clone()).collect(),
         logged: log.scans.iter().map(|s| s.pose).collect::<Vec<Pose>>(),
+        odometry: None,
     }
 }
 

@@ -21,6 +21,9 @@ pub struct TrackInput {
     pub scans: Vec<Vec<f32>>,
     /// The logged (corrected) laser poses: the truth.
     pub logged: Vec<Pose>,
+    /// Recorded odometry, one pose per scan in the odometry frame (a bag's `/odom`, an
+    /// `--odometry` file); `None`: the run synthesizes it from the logged poses.
+    pub odometry: Option<Vec<Pose>>,
 }
 
 impl TrackInput {
@@ -83,6 +86,7 @@ pub fn load(
         layout,
         scans,
         logged,
+        odometry: None,
     };
     input.views()?;
     Ok(input)

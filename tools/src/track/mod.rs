@@ -110,8 +110,10 @@ pub fn usage(m: impl Into<String>) -> TrackError {
 
 mod input;
 mod odometry;
+mod recorded;
 mod run;
 
 pub use input::{load, TrackInput};
 pub use odometry::{odometry_sample, synthesize_odometry};
+pub use recorded::{load_bag, read_odometry_file, BagSummary};
 pub use run::{run_once, Metrics, RunOptions, RunResult};

@@ -220,7 +220,16 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         retries: 0,
     };
     let progress = std::io::stderr().is_terminal();
-    let odom = synthesize_odometry(&noise, input.logged.get(..n).unwrap_or(&[]), o.seed)?;
+    let odom = match &input.odometry {
+        Some(recorded) => recorded.get(..n).unwrap_or(recorded).to_vec(),
+        None => synthesize_odometry(&noise, input.logged.get(..n).unwrap_or(&[]), o.seed)?,
+    };
+    if odom.len() < n {
+        return Err(usage(format!(
+            "the odometry has {} poses for {n} scans",
+            odom.len()
+        )));
+    }
     let mut settled = Settled::default();
     let mut seen = OdometryStep::STILL;
     for k in 0..n {

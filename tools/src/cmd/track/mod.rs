@@ -7,15 +7,17 @@ pub use report::{SeedRun, TrackReport};
 
 use crate::cmd::likelihood::LikelihoodArgs;
 use crate::cmd::scored_log::MAX_BEAMS;
+use crate::input::bag::Topics;
 use crate::track::{
-    load, run_once, usage, Init, Metrics, RunOptions, TrackError, Weighting, MAX_TRACK_PARTICLES,
-    MAX_TRACK_SEEDS,
+    load, load_bag, read_odometry_file, run_once, usage, Init, Metrics, RunOptions, TrackError,
+    Weighting, MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS,
 };
 use clap::Args;
 use std::path::PathBuf;
 
-/// `beamfield track`: run the localizer over a log.
+/// `beamfield track`: run the localizer over a log or a bag.
 #[derive(Args, Debug, Clone)]
+#[command(group(clap::ArgGroup::new("recording").required(true).args(["log", "bag"])))]
 pub struct TrackArgs {
     /// The distance-field blob (`beamfield field build`); `--init global` and recovery need it
     /// built with `--free-space`.
@@ -23,7 +25,29 @@ pub struct TrackArgs {
     pub field: PathBuf,
     /// The CARMEN log (FLASER lines with corrected poses).
     #[arg(long)]
-    pub log: PathBuf,
+    pub log: Option<PathBuf>,
+    /// A ROS 2 bag (an .mcap file or a rosbag2 directory): scans, odometry and a reference
+    /// pose by topic; the odometry is the bag's (needs --reference-topic).
+    #[arg(long, conflicts_with = "odometry")]
+    pub bag: Option<PathBuf>,
+    /// The bag's sensor_msgs/LaserScan topic.
+    #[arg(long, default_value = "/scan", requires = "bag")]
+    pub scan_topic: String,
+    /// The bag's nav_msgs/Odometry topic.
+    #[arg(long, default_value = "/odom", requires = "bag")]
+    pub odom_topic: String,
+    /// The bag's reference pose (PoseWithCovarianceStamped or PoseStamped: a recorded
+    /// amcl_pose, ground truth) the errors are measured against.
+    #[arg(long, requires = "bag")]
+    pub reference_topic: Option<String>,
+    /// The robot's frame: the laser's mount is `/tf_static`'s BASE_FRAME → the scans' frame.
+    #[arg(long, default_value = "base_link", requires = "bag")]
+    pub base_frame: String,
+    /// Recorded odometry for the log instead of synthesized: lines `index x y θ` (m, m, rad;
+    /// index 0 = the log's first scan; `#` comments). --odom-noise is then only the filter's
+    /// motion model.
+    #[arg(long, value_name = "FILE", requires = "log")]
+    pub odometry: Option<PathBuf>,
     /// Number of particles (1 to 20,000).
     #[arg(long, default_value_t = 500,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_TRACK_PARTICLES as u64))]
@@ -153,13 +177,49 @@ fn min_med_max(mut v: Vec<f64>) -> [f64; 3] {
 /// # Errors
 /// [`TrackError`].
 pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
-    let input = load(
-        &args.field,
-        &args.log,
+    let lk = (
         args.likelihood.z_hit,
         args.likelihood.z_rand,
         args.likelihood.sigma_hit,
-    )?;
+    );
+    let (input, bag, odometry) = match (&args.log, &args.bag) {
+        (Some(log), None) => {
+            let mut input = load(&args.field, log, lk.0, lk.1, lk.2)?;
+            let source = match &args.odometry {
+                Some(path) => {
+                    // Poses for the scans the run uses.
+                    let used = args
+                        .scans
+                        .map_or(input.scans.len(), |n| n.min(input.scans.len()));
+                    input.odometry = Some(read_odometry_file(path, used)?);
+                    format!("recorded ({})", path.display())
+                }
+                None => "synthesized from the logged poses with the motion model's noise".into(),
+            };
+            (input, None, source)
+        }
+        (None, Some(path)) => {
+            let bytes = crate::input::limits::read_regular_file(
+                &args.field,
+                crate::input::limits::MAX_FIELD_FILE_BYTES,
+                "field file",
+            )
+            .map_err(TrackError::Read)?;
+            let topics = Topics {
+                scan: args.scan_topic.clone(),
+                odom: args.odom_topic.clone(),
+                reference: args.reference_topic.clone(),
+                ..Topics::default()
+            };
+            let (input, summary) = load_bag(bytes, path, &topics, &args.base_frame, lk)?;
+            (
+                input,
+                Some(summary),
+                format!("recorded ({})", args.odom_topic),
+            )
+        }
+        _ => return Err(usage("give one of --log and --bag")),
+    };
     if !(1..=MAX_TRACK_SEEDS).contains(&args.seeds) {
         return Err(usage(format!(
             "--seeds {}: must be 1 ..= {MAX_TRACK_SEEDS}",
@@ -238,5 +298,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         },
         options: o,
         output: args.output.as_ref().map(|p| p.display().to_string()),
+        odometry,
+        bag,
     })
 }

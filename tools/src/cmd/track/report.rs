@@ -70,6 +70,10 @@ pub struct TrackReport {
     /// The picture written (`--output`).
     #[serde(skip)]
     pub output: Option<String>,
+    /// Where the odometry came from.
+    pub odometry: String,
+    /// What the bag gave, for a run on a bag.
+    pub bag: Option<crate::track::BagSummary>,
 }
 
 impl fmt::Display for TrackReport {
@@ -110,6 +114,25 @@ impl fmt::Display for TrackReport {
                 .map(|k| format!(", kidnapped at scan {k}"))
                 .unwrap_or_default()
         )?;
+        writeln!(f, "odometry: {}", self.odometry)?;
+        if let Some(b) = &self.bag {
+            writeln!(
+                f,
+                "bag: {} scans used, {} beams from {:.2}° every {:.3}°, max range {} m; laser mount ({}, {}, {:.2}°){}",
+                b.scans_used,
+                b.beams,
+                b.angle_min_rad.to_degrees(),
+                b.angle_increment_rad.to_degrees(),
+                b.range_max_m,
+                b.mount[0],
+                b.mount[1],
+                b.mount[2].to_degrees(),
+                if b.mount_from_tf { " from /tf_static" } else { " (centred: none in /tf_static)" }
+            )?;
+            for (why, n) in &b.skipped {
+                writeln!(f, "bag: skipped {n}: {why}")?;
+            }
+        }
         for r in &self.runs {
             let m = &r.metrics;
             writeln!(
