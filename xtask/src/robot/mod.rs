@@ -4,7 +4,7 @@
 //! 1. The Intel lab log becomes what a robot sends ([`streams`]): every scan as an LD06
 //!    revolution at 10 Hz into USART1, and into USART2 the wheel encoders at 50 Hz of a
 //!    differential-drive base driven along the logged trajectory with wheels that are not the
-//!    ones the device believes in, plus slip ([`wheels`]), the commands of the plan (an initial
+//!    ones the device believes in, plus slip (`host_tests::wheel_odometry`), the commands of the plan (an initial
 //!    pose; a global localization with all the particles, then an initial pose that puts it
 //!    right) and bad input on purpose (garbage, a replayed frame, an encoder glitch, a refused
 //!    parameter, a broken CRC).
@@ -16,7 +16,6 @@
 
 pub mod bridge;
 pub mod streams;
-pub mod wheels;
 
 use crate::cross::build_program;
 use crate::error::{Error, Result};
@@ -28,9 +27,9 @@ use beamfield::robot::{Robot, RobotCounters, Sink, SliceSource};
 use beamfield::{wrap_angle, FieldView, Pose};
 use beamfield_fixtures::regions::robot as regions;
 use beamfield_fixtures::robot_plan::{self, baud, ring, BEAMS, CAPACITY};
+use host_tests::wheel_odometry::WheelErrors;
 use std::fs;
 use streams::{revolution_time_us, Plan, Streams};
-use wheels::WheelErrors;
 
 const BIN: &str = "robot";
 const READY: &str = "robot: ready";
@@ -247,8 +246,8 @@ pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result 
         w.right_radius_scale,
         w.wheelbase_scale,
         w.slip_sigma * 100.0,
-        w.slip_event_loss * 100.0,
-        (1.0 / w.slip_event_p).round(),
+        w.hard_slip.map_or(0.0, |h| h.loss * 100.0),
+        w.hard_slip.map_or(0.0, |h| (1.0 / h.p).round()),
         s.commands,
         match plan.global_at {
             Some(g) => format!(

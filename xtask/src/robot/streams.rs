@@ -1,12 +1,12 @@
 //! What the robot sends the device, built from the Intel lab log: the scans as an LD06 byte
 //! stream at 10 Hz, the wheel encoders at 50 Hz and the commands of the plan, in time order.
 
-use super::wheels::{Encoders, WheelErrors};
 use crate::error::{Error, Result};
 use beamfield::lidar::ld06::{self, Ld06Sample};
 use beamfield::link::{Encoder, Message, SetInitialPose, SetParameters, WheelTicks, MAX_WIRE_LEN};
 use beamfield::{wrap_angle, Pose};
-use beamfield_fixtures::robot_plan::{BEAMS, CAPACITY, PARTICLES};
+use beamfield_fixtures::robot_plan::{self, BEAMS, CAPACITY, PARTICLES};
+use host_tests::wheel_odometry::{Encoders, Geometry, WheelErrors};
 use std::path::Path;
 
 /// LD06 points per revolution (one per degree) and the rotation speed written into the frames
@@ -186,7 +186,14 @@ pub fn build(log: &[LogScan], plan: &Plan, errors: WheelErrors, seed: u64) -> Re
         link.extend_from_slice(&wire[..n]);
         Ok(wire[..n].to_vec())
     };
-    let mut wheels = Encoders::new(errors, seed);
+    let w = robot_plan::WHEELS;
+    let geometry = Geometry {
+        left_radius_m: f64::from(w.left_radius_m),
+        right_radius_m: f64::from(w.right_radius_m),
+        wheelbase_m: f64::from(w.wheelbase_m),
+        ticks_per_rev: w.ticks_per_rev,
+    };
+    let mut wheels = Encoders::new(geometry, errors, seed);
     let mut injected = Injected::default();
     let (mut odometry, mut commands) = (0usize, 0usize);
     let end_us = revolution_time_us(scans.len()) + REVOLUTION_US;
