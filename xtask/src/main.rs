@@ -193,6 +193,20 @@ enum Task {
         /// Count the receive interrupt handlers instead (their longest path).
         #[arg(long, conflicts_with = "count")]
         isr: bool,
+        /// Send a ROS 2 bag (an .mcap file or a rosbag2 directory) instead of the Intel log:
+        /// its scans as LD06 revolutions, its odometry as WheelOdometry, compared with
+        /// --reference-topic (the firmware's field is the Intel lab's: a bag of that building).
+        #[arg(long, value_name = "BAG", requires = "reference_topic")]
+        bag: Option<PathBuf>,
+        /// The bag's LaserScan topic.
+        #[arg(long, default_value = "/scan")]
+        scan_topic: String,
+        /// The bag's Odometry topic.
+        #[arg(long, default_value = "/odom")]
+        odom_topic: String,
+        /// The bag's reference pose topic (PoseWithCovarianceStamped or PoseStamped).
+        #[arg(long)]
+        reference_topic: Option<String>,
         /// Offer the device's link on 127.0.0.1:PORT to `beamfield bridge --connect`: its
         /// output is forwarded there, the bridge's frames go into USART2 (paced by the device).
         #[arg(long, value_name = "PORT", conflicts_with = "host_only")]
@@ -253,6 +267,10 @@ fn main() -> ExitCode {
             isr,
             host_only,
             bridge_port,
+            bag,
+            scan_topic,
+            odom_topic,
+            reference_topic,
         } => bridge_port
             .map(robot::bridge::listen)
             .transpose()
@@ -265,6 +283,15 @@ fn main() -> ExitCode {
                         isr,
                         host_only,
                         bridge: listener.is_some(),
+                        bag: bag.map(|path| robot::BagInput {
+                            path,
+                            topics: beamfield_bag::Topics {
+                                scan: scan_topic,
+                                odom: odom_topic,
+                                reference: reference_topic,
+                                ..beamfield_bag::Topics::default()
+                            },
+                        }),
                     },
                     listener.as_ref(),
                 )

@@ -136,6 +136,7 @@ pub fn ros2(scans: usize) -> Result {
             isr: false,
             host_only: false,
             bridge: true,
+            bag: None,
         },
         Some(&listener),
     );

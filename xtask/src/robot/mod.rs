@@ -45,8 +45,15 @@ const SETTLE: usize = 10;
 /// QEMU's limit for the whole run, seconds.
 const TIMEOUT_S: u64 = 900;
 
+/// A ROS 2 bag to send instead of the Intel log.
+#[derive(Clone, Debug)]
+pub struct BagInput {
+    pub path: std::path::PathBuf,
+    pub topics: beamfield_bag::Topics,
+}
+
 /// What `cargo xtask robot` is asked to do.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Options {
     /// Scans of the log to send (all by default).
     pub scans: Option<usize>,
@@ -61,6 +68,8 @@ pub struct Options {
     /// Offer the device's link to a bridge (`bridge`): the listening socket is the second
     /// argument of [`robot`].
     pub bridge: bool,
+    /// A bag's scans, odometry and reference instead of the Intel log and simulated wheels.
+    pub bag: Option<BagInput>,
 }
 
 /// Frames sent by the application, in order.
@@ -111,7 +120,7 @@ fn replay(streams: &Streams, blob: &[u8], free: &[u8]) -> Result<(Vec<Message>, 
 fn deterministic(m: &Message) -> String {
     match m {
         Message::Estimate(e) => format!(
-            "estimate t={} x={:08x} y={:08x} th={:08x} ess={:08x} flags={:04x} cov={:08x?} odom={:08x}/{:08x}/{:08x}",
+            "estimate t={} x={:08x} y={:08x} th={:08x} ess={:08x} flags={:04x} cov={:08x?} odom={:08x}/{:08x}/{:08x} quality={:?}/{:08x}",
             e.timestamp_us,
             e.pose.x_m.to_bits(),
             e.pose.y_m.to_bits(),
@@ -122,6 +131,8 @@ fn deterministic(m: &Message) -> String {
             e.odometry.x_m.to_bits(),
             e.odometry.y_m.to_bits(),
             e.odometry.theta_rad.to_bits(),
+            e.quality.state,
+            e.quality.score.to_bits(),
         ),
         Message::Heartbeat(h) => format!(
             "heartbeat t={} scans={} updates={}",
@@ -225,8 +236,16 @@ fn accuracy(frames: &[Message], s: &Streams, plan: &Plan) -> Accuracy {
 
 /// Runs the task; with `opts.bridge`, the bridge connects to `listener`.
 pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result {
-    let log_path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
-    let log = streams::read_log(&log_path)?;
+    let (log, recorded) = match &opts.bag {
+        Some(b) => {
+            let (log, odom) = streams::read_bag(b)?;
+            (log, Some(odom))
+        }
+        None => {
+            let log_path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
+            (streams::read_log(&log_path)?, None)
+        }
+    };
     let scans = opts.scans.unwrap_or(log.len()).clamp(2, log.len());
     let kidnap = !opts.no_kidnap && scans > GLOBAL_AT + RECOVER_AFTER + SETTLE;
     let plan = Plan {
@@ -234,9 +253,35 @@ pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result 
         global_at: kidnap.then_some(GLOBAL_AT),
         recover_after: RECOVER_AFTER,
     };
-    let mut s = streams::build(&log, &plan, WheelErrors::TYPICAL, WHEEL_SEED)?;
+    let source = match &recorded {
+        Some(poses) => streams::Odometry::Recorded(poses),
+        None => streams::Odometry::Wheels {
+            errors: WheelErrors::TYPICAL,
+            seed: WHEEL_SEED,
+        },
+    };
+    let mut s = streams::build(&log, &plan, source)?;
     let w = WheelErrors::TYPICAL;
-    println!(
+    if let Some(b) = &opts.bag {
+        println!(
+            "robot: {} scans of {} (reference {}) as {} LD06 revolutions at 10 Hz ({} bytes into USART1); its {} as {} WheelOdometry messages at 50 Hz, {} commands, and bad input ({} garbage bytes, {} replayed frame, {} odometry jump, {} refused parameter, {} broken CRC): {} bytes into USART2",
+            scans,
+            b.path.display(),
+            b.topics.reference.as_deref().unwrap_or("?"),
+            s.revolutions,
+            s.lidar.len(),
+            b.topics.odom,
+            s.odometry,
+            s.commands,
+            s.injected.garbage,
+            s.injected.out_of_order,
+            s.injected.out_of_range,
+            s.injected.refused,
+            s.injected.bad_crc,
+            s.link.len()
+        );
+    } else {
+        println!(
         "robot: {} Intel scans as {} LD06 revolutions at 10 Hz ({} bytes into USART1); {} wheel-tick messages at 50 Hz from a differential drive with left/right radii x{}/x{}, wheelbase x{} of what the device believes, {} % slip per step and a {} % slip one step in {}, {} commands{}, and bad input ({} garbage bytes, {} replayed frame, {} encoder glitch, {} refused parameter, {} broken CRC): {} bytes into USART2",
         scans,
         s.revolutions,
@@ -262,6 +307,7 @@ pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result 
         s.injected.bad_crc,
         s.link.len()
     );
+    }
     let (blob, free) = assets()?;
     // With a bridge, the device runs first: what reaches USART2 is known only afterwards, and
     // the host replays exactly that.
@@ -482,7 +528,7 @@ fn compare(host: &[Message], device: &[Message], by_kind: bool) -> Result {
         .count();
     let heartbeats = host.len() - estimates - errors;
     println!(
-        "device = host: all {estimates} estimates bit for bit (time, pose, covariance, ESS, flags, odometry), all {errors} error reports, all {heartbeats} heartbeats' time, scans and updates{}; then {extra} heartbeats of the silent line at the end",
+        "device = host: all {estimates} estimates bit for bit (time, pose, covariance, ESS, flags, odometry, quality), all {errors} error reports, all {heartbeats} heartbeats' time, scans and updates{}; then {extra} heartbeats of the silent line at the end",
         if by_kind { " (each kind in order)" } else { "" }
     );
     Ok(())

@@ -3,7 +3,9 @@
 
 use crate::error::{Error, Result};
 use beamfield::lidar::ld06::{self, Ld06Sample};
-use beamfield::link::{Encoder, Message, SetInitialPose, SetParameters, WheelTicks, MAX_WIRE_LEN};
+use beamfield::link::{
+    Encoder, Message, SetInitialPose, SetParameters, WheelOdometry, WheelTicks, MAX_WIRE_LEN,
+};
 use beamfield::{wrap_angle, Pose};
 use beamfield_fixtures::robot_plan::{self, BEAMS, CAPACITY, PARTICLES};
 use host_tests::wheel_odometry::{Encoders, Geometry, WheelErrors};
@@ -117,16 +119,22 @@ fn beam_at(cw_deg: usize) -> Option<usize> {
 /// The pose of the trajectory at `t_us`: revolution k's logged pose at its time, linear in
 /// between (heading along the shorter arc), the first pose before the first time.
 fn truth_at(scans: &[LogScan], t_us: u64) -> Pose {
+    pose_at(scans.len(), |k| scans[k].pose, t_us)
+}
+
+/// The pose at `t_us` of a series with one pose per revolution (`n` of them, `pose(k)` the
+/// k-th), linear in between, the first before the first and the last after the last.
+fn pose_at(n: usize, pose: impl Fn(usize) -> Pose, t_us: u64) -> Pose {
     let t0 = revolution_time_us(0);
     if t_us <= t0 {
-        return scans[0].pose;
+        return pose(0);
     }
     let k = ((t_us - t0) / REVOLUTION_US) as usize;
-    if k + 1 >= scans.len() {
-        return scans[scans.len() - 1].pose;
+    if k + 1 >= n {
+        return pose(n - 1);
     }
     let f = ((t_us - revolution_time_us(k)) as f64 / REVOLUTION_US as f64) as f32;
-    let (a, b) = (scans[k].pose, scans[k + 1].pose);
+    let (a, b) = (pose(k), pose(k + 1));
     Pose::new(
         a.x_m + f * (b.x_m - a.x_m),
         a.y_m + f * (b.y_m - a.y_m),
@@ -143,7 +151,17 @@ fn covariance(sigma_xy: f32, sigma_theta: f32) -> [[f32; 3]; 3] {
 }
 
 /// Builds both streams for `plan` from `log`, the wheels driven with `errors` (seeded by `seed`).
-pub fn build(log: &[LogScan], plan: &Plan, errors: WheelErrors, seed: u64) -> Result<Streams> {
+/// Where the odometry comes from.
+#[derive(Clone, Copy)]
+pub enum Odometry<'a> {
+    /// Encoder ticks of a simulated base driven along the logged poses.
+    Wheels { errors: WheelErrors, seed: u64 },
+    /// Recorded odometry poses, one per scan (a bag's `/odom` at each scan's stamp), sent as
+    /// `WheelOdometry` interpolated to each message's time.
+    Recorded(&'a [Pose]),
+}
+
+pub fn build(log: &[LogScan], plan: &Plan, odometry_source: Odometry) -> Result<Streams> {
     let scans = &log[..plan.scans.min(log.len())];
     let mut lidar = Vec::new();
     let mut rev = vec![0u8; ld06::revolution_len(SAMPLES)];
@@ -193,7 +211,19 @@ pub fn build(log: &[LogScan], plan: &Plan, errors: WheelErrors, seed: u64) -> Re
         wheelbase_m: f64::from(w.wheelbase_m),
         ticks_per_rev: w.ticks_per_rev,
     };
-    let mut wheels = Encoders::new(geometry, errors, seed);
+    let (mut wheels, recorded) = match odometry_source {
+        Odometry::Wheels { errors, seed } => (Some(Encoders::new(geometry, errors, seed)), None),
+        Odometry::Recorded(poses) => {
+            if poses.len() < scans.len() {
+                return Err(Error::Host(format!(
+                    "{} odometry poses for {} scans",
+                    poses.len(),
+                    scans.len()
+                )));
+            }
+            (None, Some(poses))
+        }
+    };
     let mut injected = Injected::default();
     let (mut odometry, mut commands) = (0usize, 0usize);
     let end_us = revolution_time_us(scans.len()) + REVOLUTION_US;
@@ -211,17 +241,30 @@ pub fn build(log: &[LogScan], plan: &Plan, errors: WheelErrors, seed: u64) -> Re
     let mut t = 0u64;
     while t <= end_us {
         let now = truth_at(scans, t);
-        let [left, right] = if t == 0 {
-            wheels.ticks()
-        } else {
-            wheels.drive(&previous, &now)
+        let (ticks, [left, right]) = match (&mut wheels, recorded) {
+            (Some(wheels), _) => {
+                let [left, right] = if t == 0 {
+                    wheels.ticks()
+                } else {
+                    wheels.drive(&previous, &now)
+                };
+                let m = Message::WheelTicks(WheelTicks {
+                    timestamp_us: t,
+                    left_ticks: left,
+                    right_ticks: right,
+                });
+                (m, [left, right])
+            }
+            (None, Some(poses)) => {
+                let m = Message::WheelOdometry(WheelOdometry {
+                    timestamp_us: t,
+                    pose: pose_at(scans.len(), |k| poses[k], t),
+                });
+                (m, [0, 0])
+            }
+            (None, None) => return Err(Error::Host("no odometry source".into())),
         };
         previous = now;
-        let ticks = Message::WheelTicks(WheelTicks {
-            timestamp_us: t,
-            left_ticks: left,
-            right_ticks: right,
-        });
         if t == crc_us {
             // One bit flipped in the middle of the frame: the device counts a CRC failure.
             let mut f = put(&mut enc, &mut Vec::new(), ticks)?;
@@ -296,15 +339,30 @@ pub fn build(log: &[LogScan], plan: &Plan, errors: WheelErrors, seed: u64) -> Re
         }
         if t == jump_us {
             // An encoder glitch: a million ticks in 20 ms.
-            put(
-                &mut enc,
-                &mut link,
-                Message::WheelTicks(WheelTicks {
-                    timestamp_us: t + 1,
-                    left_ticks: left.wrapping_add(1_000_000),
-                    right_ticks: right,
-                }),
-            )?;
+            let glitch = if let Some(poses) = recorded {
+                // A kilometre in a microsecond: valid on the link, refused by the device's
+                // speed limit, as the encoder glitch is.
+                let p = pose_at(scans.len(), |k| poses[k], t);
+                put(
+                    &mut enc,
+                    &mut Vec::new(),
+                    Message::WheelOdometry(WheelOdometry {
+                        timestamp_us: t + 1,
+                        pose: Pose::new(p.x_m + 1000.0, p.y_m, p.theta_rad),
+                    }),
+                )?
+            } else {
+                put(
+                    &mut enc,
+                    &mut Vec::new(),
+                    Message::WheelTicks(WheelTicks {
+                        timestamp_us: t + 1,
+                        left_ticks: left.wrapping_add(1_000_000),
+                        right_ticks: right,
+                    }),
+                )?
+            };
+            link.extend_from_slice(&glitch);
             injected.out_of_range += 1;
         }
         if t == refused_us {
@@ -330,4 +388,89 @@ pub fn build(log: &[LogScan], plan: &Plan, errors: WheelErrors, seed: u64) -> Re
         injected,
         truth,
     })
+}
+
+/// A bag's scans as the replay's (ranges, and the reference pose at each scan's stamp) and its
+/// odometry at the same stamps. The firmware's beam layout is the Intel log's (180 beams from
+/// −90° in 1° steps, the laser at the base's centre): a bag with other scans is refused.
+pub fn read_bag(b: &super::BagInput) -> Result<(Vec<LogScan>, Vec<Pose>)> {
+    use beamfield_bag::{interpolate, Bag};
+    if b.topics.reference.is_none() {
+        return Err(Error::Requirement(
+            "--bag needs --reference-topic: the estimates are compared with it".into(),
+        ));
+    }
+    let bag = Bag::read(&b.path, &b.topics).map_err(|e| Error::Host(format!("--bag: {e}")))?;
+    let first = bag
+        .scans
+        .first()
+        .ok_or_else(|| Error::Host(format!("--bag: no usable scan on {}", b.topics.scan)))?;
+    let want_min = -std::f32::consts::FRAC_PI_2;
+    let want_step = std::f32::consts::PI / BEAMS as f32;
+    let fits = |s: &beamfield_bag::LaserScan| {
+        s.ranges.len() == BEAMS
+            && (s.angle_min - want_min).abs() < 1e-5
+            && (s.angle_increment - want_step).abs() < 1e-6
+    };
+    if !fits(&first.value) {
+        return Err(Error::Requirement(format!(
+            "--bag: the firmware is built for {BEAMS} beams from -90 deg in 1 deg steps; the bag's scans have {} beams from {:.3} deg in {:.4} deg steps",
+            first.value.ranges.len(),
+            first.value.angle_min.to_degrees(),
+            first.value.angle_increment.to_degrees()
+        )));
+    }
+    if let Some(m) = bag.mount("base_link", &first.value.frame_id) {
+        if m.x.abs() > 1e-6 || m.y.abs() > 1e-6 || m.theta.abs() > 1e-6 {
+            return Err(Error::Requirement(format!(
+                "--bag: the laser is mounted at ({}, {}, {} rad) on base_link; the firmware's layout has it at the centre",
+                m.x, m.y, m.theta
+            )));
+        }
+    }
+    let to_pose = |p: beamfield_bag::Pose2| Pose::new(p.x as f32, p.y as f32, p.theta as f32);
+    let (mut log, mut odom, mut skipped) = (Vec::new(), Vec::new(), 0usize);
+    for s in &bag.scans {
+        let (Some(o), Some(r)) = (
+            interpolate(&bag.odometry, s.stamp_ns),
+            interpolate(&bag.reference, s.stamp_ns),
+        ) else {
+            skipped += 1;
+            continue;
+        };
+        if !fits(&s.value) {
+            skipped += 1;
+            continue;
+        }
+        let v = &s.value;
+        let ranges_m = v
+            .ranges
+            .iter()
+            .map(|&r| {
+                if r.is_finite() && r >= v.range_min && r <= v.range_max {
+                    r
+                } else {
+                    f32::INFINITY
+                }
+            })
+            .collect();
+        log.push(LogScan {
+            ranges_m,
+            pose: to_pose(r),
+        });
+        odom.push(to_pose(o));
+    }
+    if log.len() < 2 {
+        return Err(Error::Host(format!(
+            "--bag: {} scans have odometry and a reference at their stamp ({skipped} skipped)",
+            log.len()
+        )));
+    }
+    if skipped > 0 || !bag.skipped.is_empty() {
+        println!(
+            "robot: from the bag, {skipped} scans skipped (no odometry or reference at their stamp, or other angles); messages skipped: {:?}",
+            bag.skipped
+        );
+    }
+    Ok((log, odom))
 }

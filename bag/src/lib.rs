@@ -1,4 +1,4 @@
-//! ROS 2 bags in: the scans, odometry, a reference pose and the laser's mount from an MCAP file
+//! ROS 2 bags in for beamfield's host tools (`beamfield track --bag`, `cargo xtask robot --bag`): the scans, odometry, a reference pose and the laser's mount from an MCAP file
 //! (what `ros2 bag record` writes since Iron), by topic, with each message's CDR decoded here
 //! ([`cdr`]): `sensor_msgs/msg/LaserScan`, `nav_msgs/msg/Odometry`,
 //! `geometry_msgs/msg/PoseWithCovarianceStamped` or `PoseStamped`, `tf2_msgs/msg/TFMessage`.
