@@ -174,7 +174,11 @@ fn pose(c: &mut Cdr) -> Result<Option<Pose2>, CdrError> {
         .map(|theta| Pose2 { x, y, theta }))
 }
 
-fn read_scan(data: &[u8]) -> Result<(u64, LaserScan), CdrError> {
+/// Decodes a `sensor_msgs/msg/LaserScan`: its header stamp (ns) and the scan.
+///
+/// # Errors
+/// [`CdrError`] for a message that is not one.
+pub fn decode_scan(data: &[u8]) -> Result<(u64, LaserScan), CdrError> {
     let mut c = Cdr::new(data)?;
     let t = stamp(&mut c)?;
     let frame_id = c.string()?;
@@ -200,8 +204,12 @@ fn read_scan(data: &[u8]) -> Result<(u64, LaserScan), CdrError> {
     ))
 }
 
-/// nav_msgs/Odometry: header, child_frame_id, PoseWithCovariance (the twist is not read).
-fn read_odometry(data: &[u8]) -> Result<(u64, Option<Pose2>), CdrError> {
+/// Decodes a `nav_msgs/msg/Odometry`: header, child_frame_id, the pose (the twist is not read);
+/// `None` for a pose that is not finite.
+///
+/// # Errors
+/// [`CdrError`] for a message that is not one.
+pub fn decode_odometry(data: &[u8]) -> Result<(u64, Option<Pose2>), CdrError> {
     let mut c = Cdr::new(data)?;
     let t = stamp(&mut c)?;
     let _frame = c.string()?;
@@ -209,15 +217,23 @@ fn read_odometry(data: &[u8]) -> Result<(u64, Option<Pose2>), CdrError> {
     Ok((t, pose(&mut c)?))
 }
 
-/// PoseWithCovarianceStamped or PoseStamped: the header, then the pose.
-fn read_stamped_pose(data: &[u8]) -> Result<(u64, Option<Pose2>), CdrError> {
+/// Decodes a `PoseWithCovarianceStamped` or `PoseStamped`: the header, then the pose; `None`
+/// for a pose that is not finite.
+///
+/// # Errors
+/// [`CdrError`] for a message that is not one.
+pub fn decode_stamped_pose(data: &[u8]) -> Result<(u64, Option<Pose2>), CdrError> {
     let mut c = Cdr::new(data)?;
     let t = stamp(&mut c)?;
     let _frame = c.string()?;
     Ok((t, pose(&mut c)?))
 }
 
-fn read_tf(data: &[u8]) -> Result<Vec<Mount>, CdrError> {
+/// Decodes a `tf2_msgs/msg/TFMessage` into its planar transforms (those with a finite pose).
+///
+/// # Errors
+/// [`CdrError`] for a message that is not one.
+pub fn decode_tf(data: &[u8]) -> Result<Vec<Mount>, CdrError> {
     let mut c = Cdr::new(data)?;
     // A TransformStamped is at least a stamp, two strings and seven f64.
     let n = c.count(8 + 8 + 56)?;
@@ -271,27 +287,60 @@ impl Role {
     }
 }
 
+/// The topics to read and the reader of each.
+fn roles(topics: &Topics) -> Vec<(&str, Role)> {
+    let mut roles: Vec<(&str, Role)> = vec![
+        (topics.scan.as_str(), Role::Scan),
+        (topics.odom.as_str(), Role::Odom),
+        (topics.tf_static.as_str(), Role::Tf),
+    ];
+    if let Some(r) = &topics.reference {
+        roles.push((r.as_str(), Role::Reference));
+    }
+    roles
+}
+
 impl Bag {
     /// Reads the topics of `topics` from a bag (an `.mcap` file or a rosbag2 directory).
     /// `/tf_static` is optional; the scan and odometry topics and a reference topic asked for
     /// must be there.
     pub fn read(path: &Path, topics: &Topics) -> Result<Self, BagError> {
         let mut bag = Bag::default();
-        let mut roles: Vec<(&str, Role)> = vec![
-            (topics.scan.as_str(), Role::Scan),
-            (topics.odom.as_str(), Role::Odom),
-            (topics.tf_static.as_str(), Role::Tf),
-        ];
-        if let Some(r) = &topics.reference {
-            roles.push((r.as_str(), Role::Reference));
-        }
+        let roles = roles(topics);
         let mut last: BTreeMap<&str, u64> = BTreeMap::new();
         for file in mcap_files(path)? {
             let bytes = std::fs::read(&file).map_err(|e| BagError::Io(file.clone(), e))?;
-            let stream = mcap::MessageStream::new(&bytes)
-                .map_err(|e| BagError::Mcap(file.clone(), e.to_string()))?;
+            bag.add_mcap(&file, &bytes, &roles, &mut last)?;
+        }
+        bag.check_topics(&roles)?;
+        Ok(bag)
+    }
+
+    /// Reads the topics of `topics` from the bytes of one MCAP file (`name` for errors).
+    ///
+    /// # Errors
+    /// As [`Bag::read`], but for a missing file.
+    pub fn from_mcap(name: &Path, bytes: &[u8], topics: &Topics) -> Result<Self, BagError> {
+        let mut bag = Bag::default();
+        let roles = roles(topics);
+        bag.add_mcap(name, bytes, &roles, &mut BTreeMap::new())?;
+        bag.check_topics(&roles)?;
+        Ok(bag)
+    }
+
+    fn add_mcap<'t>(
+        &mut self,
+        file: &Path,
+        bytes: &[u8],
+        roles: &[(&'t str, Role)],
+        last: &mut BTreeMap<&'t str, u64>,
+    ) -> Result<(), BagError> {
+        let bag = self;
+        {
+            let stream = mcap::MessageStream::new(bytes)
+                .map_err(|e| BagError::Mcap(file.into(), e.to_string()))?;
             for m in stream {
-                let m = m.map_err(|e| BagError::Mcap(file.clone(), e.to_string()))?;
+                let m = m.map_err(|e| BagError::Mcap(file.into(), e.to_string()))?;
                 let topic = m.channel.topic.as_str();
                 let schema = m.channel.schema.as_ref().map_or("", |s| s.name.as_str());
                 let entry = bag
@@ -315,10 +364,15 @@ impl Bag {
                         encoding: m.channel.message_encoding.clone(),
                     });
                 }
-                bag.take(name, role, &m.data, &mut last);
+                bag.take(name, role, &m.data, last);
             }
         }
-        for (topic, role) in &roles {
+        Ok(())
+    }
+
+    fn check_topics(&self, roles: &[(&str, Role)]) -> Result<(), BagError> {
+        let bag = self;
+        for (topic, role) in roles {
             if *role != Role::Tf && !bag.topics.contains_key(*topic) {
                 return Err(BagError::MissingTopic {
                     topic: (*topic).into(),
@@ -330,7 +384,7 @@ impl Bag {
                 });
             }
         }
-        Ok(bag)
+        Ok(())
     }
 
     fn skip(&mut self, why: String) {
@@ -357,7 +411,7 @@ impl Bag {
             true
         };
         match role {
-            Role::Scan => match read_scan(data) {
+            Role::Scan => match decode_scan(data) {
                 Ok((_, s)) if s.ranges.is_empty() => self.skip(format!("{topic}: no ranges")),
                 Ok((t, s)) => {
                     if in_order(t, self) {
@@ -371,9 +425,9 @@ impl Bag {
             },
             Role::Odom | Role::Reference => {
                 let r = if role == Role::Odom {
-                    read_odometry(data)
+                    decode_odometry(data)
                 } else {
-                    read_stamped_pose(data)
+                    decode_stamped_pose(data)
                 };
                 match r {
                     Ok((_, None)) => self.skip(format!("{topic}: a pose that is not finite")),
@@ -393,7 +447,7 @@ impl Bag {
                     Err(e) => self.skip(format!("{topic}: malformed ({e})")),
                 }
             }
-            Role::Tf => match read_tf(data) {
+            Role::Tf => match decode_tf(data) {
                 Ok(m) => self.mounts.extend(m),
                 Err(e) => self.skip(format!("{topic}: malformed ({e})")),
             },

@@ -60,12 +60,14 @@ enum Command {
     /// The device's link to ROS 2, as nav2_amcl speaks it: estimates on amcl_pose, the
     /// map → odom transform on /tf, initialpose and nav2_amcl's services to the device
     /// (docs/nav2.md).
+    #[cfg(feature = "bridge")]
     Bridge(beamfield_bridge::BridgeArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        #[cfg(feature = "bridge")]
         Command::Bridge(args) => finish("beamfield bridge", beamfield_bridge::run(&args), cli.json),
         Command::Info => finish(
             "beamfield info",
