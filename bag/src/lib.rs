@@ -8,6 +8,7 @@
 //! type is an error that names what the bag does have.
 
 pub mod cdr;
+pub mod guard;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -336,6 +337,7 @@ impl Bag {
         last: &mut BTreeMap<&'t str, u64>,
     ) -> Result<(), BagError> {
         let bag = self;
+        guard::check(bytes).map_err(|e| BagError::Mcap(file.into(), e.to_string()))?;
         {
             let stream = mcap::MessageStream::new(bytes)
                 .map_err(|e| BagError::Mcap(file.into(), e.to_string()))?;
