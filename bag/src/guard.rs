@@ -23,7 +23,11 @@ pub struct BadLength {
 
 impl std::fmt::Display for BadLength {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} at byte {} points past its record", self.what, self.at)
+        write!(
+            f,
+            "{} at byte {} points past its record",
+            self.what, self.at
+        )
     }
 }
 
@@ -196,7 +200,9 @@ fn records_of(mut b: &[u8], depth: u8) -> Result<(), BadLength> {
             .map(|l| u64::from_le_bytes(l.try_into().unwrap_or([0xff; 8])))
             .and_then(|l| usize::try_from(l).ok())
             .ok_or(bad(0))?;
-        let body = rest.get(8..8usize.checked_add(len).ok_or(bad(0))?).ok_or(bad(0))?;
+        let body = rest
+            .get(8..8usize.checked_add(len).ok_or(bad(0))?)
+            .ok_or(bad(0))?;
         record(op, body, depth).ok_or(bad(op))?;
         b = &rest[8 + len..];
         // The footer ends the file (the closing magic follows, already taken off); it has no
