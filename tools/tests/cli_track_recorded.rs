@@ -162,3 +162,56 @@ fn odometry_file_for_a_log() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("line 1: x, y and θ must be finite"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_nav2_map_yaml_is_a_field() {
+    // The Intel map as map_server YAML + PGM, made from the log as firmware/assets/intel.bin
+    // was; the run on it equals the run on the blob.
+    let dir = std::env::temp_dir().join(format!("bf-yaml-field-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let yaml = dir.join("intel.yaml");
+    let log = repo().join("data/laser_intel_lab/intel-corrected.log");
+    let out = bin()
+        .args(["map", "from-log"])
+        .arg(&log)
+        .arg("-o")
+        .arg(&yaml)
+        .args(["--resolution", "0.05"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let run = |field: &Path| {
+        run_json(bin().args([
+            "--json",
+            "track",
+            "--field",
+            field.to_str().unwrap(),
+            "--bag",
+            bag().to_str().unwrap(),
+            "--reference-topic",
+            "/ground_truth",
+        ]))
+    };
+    let (from_yaml, from_blob) = (run(&yaml), run(&field()));
+    assert_eq!(from_yaml["runs"], from_blob["runs"]);
+    // A YAML that is not a map is refused with its name.
+    let bad = dir.join("bad.yaml");
+    std::fs::write(&bad, "image: nowhere.pgm\n").unwrap();
+    fails_with(
+        &[
+            "track",
+            "--field",
+            bad.to_str().unwrap(),
+            "--bag",
+            bag().to_str().unwrap(),
+            "--reference-topic",
+            "/ground_truth",
+        ],
+        "--field",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -44,6 +44,33 @@ impl TrackInput {
     }
 }
 
+/// The field a run scores against: a blob file (`beamfield field build`), or a nav2 /
+/// map_server map YAML (`.yaml`, `.yml`), from which the blob and its free-space section are
+/// built here as `beamfield field build MAP.yaml --free-space` would (default clamp distance).
+///
+/// # Errors
+/// [`TrackError::Read`] for an unreadable file, [`TrackError::Usage`] for a map that cannot be
+/// read or turned into a blob.
+pub fn field_bytes(field: &Path) -> Result<Vec<u8>, TrackError> {
+    let is_yaml = field
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
+    if !is_yaml {
+        return crate::input::limits::read_regular_file(
+            field,
+            crate::input::limits::MAX_FIELD_FILE_BYTES,
+            "field file",
+        )
+        .map_err(TrackError::Read);
+    }
+    let bad = |e: &dyn std::fmt::Display| usage(format!("--field {}: {e}", field.display()));
+    let map = crate::input::map::load_map(field).map_err(|e| bad(&e))?;
+    let mut bytes =
+        crate::blob::build_blob(&map, beamfield::field::DEFAULT_MAX_DIST_M).map_err(|e| bad(&e))?;
+    bytes.extend(crate::blob::build_free_space(&map).map_err(|e| bad(&e))?);
+    Ok(bytes)
+}
+
 /// Loads the field and the log.
 ///
 /// # Errors
@@ -55,12 +82,7 @@ pub fn load(
     z_rand: f32,
     sigma_hit: f32,
 ) -> Result<TrackInput, TrackError> {
-    let bytes = crate::input::limits::read_regular_file(
-        field,
-        crate::input::limits::MAX_FIELD_FILE_BYTES,
-        "field file",
-    )
-    .map_err(TrackError::Read)?;
+    let bytes = field_bytes(field)?;
     let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
     let max_range = log
         .max_range

@@ -113,7 +113,7 @@ mod odometry;
 mod recorded;
 mod run;
 
-pub use input::{load, TrackInput};
+pub use input::{field_bytes, load, TrackInput};
 pub use odometry::{odometry_sample, synthesize_odometry};
 pub use recorded::{load_bag, read_odometry_file, BagSummary};
 pub use run::{run_once, Metrics, RunOptions, RunResult};

@@ -9,8 +9,8 @@ use crate::cmd::likelihood::LikelihoodArgs;
 use crate::cmd::scored_log::MAX_BEAMS;
 use crate::input::bag::Topics;
 use crate::track::{
-    load, load_bag, read_odometry_file, run_once, usage, Init, Metrics, RunOptions, TrackError,
-    Weighting, MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS,
+    field_bytes, load, load_bag, read_odometry_file, run_once, usage, Init, Metrics, RunOptions,
+    TrackError, Weighting, MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS,
 };
 use clap::Args;
 use std::path::PathBuf;
@@ -19,8 +19,8 @@ use std::path::PathBuf;
 #[derive(Args, Debug, Clone)]
 #[command(group(clap::ArgGroup::new("recording").required(true).args(["log", "bag"])))]
 pub struct TrackArgs {
-    /// The distance-field blob (`beamfield field build`); `--init global` and recovery need it
-    /// built with `--free-space`.
+    /// The distance-field blob (`beamfield field build`; `--init global` and recovery need it
+    /// built with `--free-space`), or a nav2 map YAML, turned into a blob with its free space.
     #[arg(long)]
     pub field: PathBuf,
     /// The CARMEN log (FLASER lines with corrected poses).
@@ -199,12 +199,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
             (input, None, source)
         }
         (None, Some(path)) => {
-            let bytes = crate::input::limits::read_regular_file(
-                &args.field,
-                crate::input::limits::MAX_FIELD_FILE_BYTES,
-                "field file",
-            )
-            .map_err(TrackError::Read)?;
+            let bytes = field_bytes(&args.field)?;
             let topics = Topics {
                 scan: args.scan_topic.clone(),
                 odom: args.odom_topic.clone(),
