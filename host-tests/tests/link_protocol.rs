@@ -241,6 +241,7 @@ fn line(seq: u16, m: &Message) -> String {
                 (e.quality.state as u8).to_string(),
                 f(e.quality.score),
             ],
+            pose(&e.odometry),
         ]
         .concat(),
         Message::Heartbeat(h) => [
