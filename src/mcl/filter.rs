@@ -486,6 +486,27 @@ impl<'p, const N: usize> Mcl<'p, N> {
             }
         }
         self.estimate = rw.estimate;
+        if let (true, Some(r), Some(free)) = (reset, self.config.resetting, free) {
+            if r.reset_candidates > 1 {
+                let m = ((n as f32 * r.reset_fraction) as usize).clamp(1, n);
+                // The survivors first (all of the set's places are then equal), then the m
+                // places compete with the candidates.
+                self.resample(0, rw.sum, None, rng);
+                let replaced =
+                    self.fill_by_selection(m, r.reset_candidates, free, &mut log_likelihood, rng);
+                return Ok(Update {
+                    estimate: rw.estimate,
+                    ln_avg_likelihood: ln_avg,
+                    random_fraction,
+                    resampled: true,
+                    injected: replaced,
+                    retried,
+                    quality: report,
+                    expanded,
+                    reset: replaced > 0,
+                });
+            }
+        }
         let u = uniform_f32(rng);
         let m = if free.is_some() {
             ((n as f32 * random_fraction + u) as usize).min(n)
@@ -655,6 +676,69 @@ impl<'p, const N: usize> Mcl<'p, N> {
         } else {
             (1.0 - ratio).max(0.0)
         }
+    }
+
+    /// Sensor resetting in fixed memory ([`Resetting::reset_candidates`]): the particles at
+    /// the `m` places `⌊j·n/m⌋` (`j` < `m`, spread over the set) are scored by
+    /// `log_likelihood` and compete with `m·k` poses drawn uniformly from `free` (four
+    /// `next_u32` each, [`FreeSpace::sample_pose`]), scored one at a time: each candidate that
+    /// scores better than the worst kept one takes its place (a NaN score never wins). So a
+    /// cloud that was right after all (a false `Lost`) keeps its particles, and one that was
+    /// wrong gives way. The weights are left uniform. Returns the places taken by candidates.
+    fn fill_by_selection<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
+        &mut self,
+        m: usize,
+        k: u16,
+        free: &FreeSpace<'_>,
+        log_likelihood: &mut F,
+        rng: &mut R,
+    ) -> u16 {
+        let n = self.len;
+        let m = m.min(n);
+        if m == 0 {
+            return 0;
+        }
+        let place = |j: usize| j * n / m;
+        let poses = &mut self.store.poses;
+        // The kept poses' scores sit in the weights of their places until the end.
+        let scores = &mut self.store.weights;
+        let finite = |l: f32| if l.is_nan() { f32::NEG_INFINITY } else { l };
+        for j in 0..m {
+            if let (Some(p), Some(w)) = (poses.get(place(j)), scores.get_mut(place(j))) {
+                *w = finite(log_likelihood(p));
+            }
+        }
+        let worst_of = |scores: &[f32]| {
+            let (mut worst, mut at) = (f32::INFINITY, 0usize);
+            for j in 0..m {
+                let w = scores.get(place(j)).copied().unwrap_or(f32::NEG_INFINITY);
+                if w < worst {
+                    worst = w;
+                    at = j;
+                }
+            }
+            (worst, at)
+        };
+        let (mut worst, mut worst_at) = worst_of(scores);
+        let mut taken = 0u16;
+        for _ in 0..m.saturating_mul(usize::from(k)) {
+            let pose = free.sample_pose(rng);
+            let l = finite(log_likelihood(&pose));
+            if l > worst {
+                if let (Some(p), Some(w)) = (
+                    poses.get_mut(place(worst_at)),
+                    scores.get_mut(place(worst_at)),
+                ) {
+                    *p = pose;
+                    *w = l;
+                }
+                taken = taken.saturating_add(1);
+                // Found again after each change (they get rarer as the kept ones improve).
+                (worst, worst_at) = worst_of(scores);
+            }
+        }
+        self.reset_weights_only();
+        taken
     }
 
     /// Low-variance resampling of `n − m` particles and `m` random ones from `free`, in place.

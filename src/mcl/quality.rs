@@ -21,7 +21,9 @@
 //! # Decision ([`QualityThresholds`], defaults in brackets)
 //! With the explained share `e` (its average):
 //! - `Lost` when `e < lost_explained` [0.35], or when `e < lost_explained_dropping` [0.5] and
-//!   the likelihood per beam has dropped by more than `dropping_nats` [0.25 nats per beam];
+//!   the likelihood per beam has dropped by more than `dropping_nats` [0.25 nats per beam],
+//!   or when `e` has fallen more than `lost_explained_fall` [0.3] below its own slow average
+//!   (rate [`EXPLAINED_SLOW_RATE`]);
 //! - `Uncertain` when `e < tracking_explained` [0.65], or the spread is above `spread_m` [0.25 m]
 //!   or `spread_rad` [0.15 rad], or the concentration is below `concentration` [0.5];
 //! - `Tracking` otherwise;
@@ -46,6 +48,9 @@ pub const EXPLAINED_RATE: f32 = 0.5;
 pub const LIKELIHOOD_FAST_RATE: f32 = 0.3;
 /// The slow average's rate of the likelihood per beam (per update).
 pub const LIKELIHOOD_SLOW_RATE: f32 = 0.02;
+/// Rate of the slow average of the explained share
+/// ([`QualityThresholds::lost_explained_fall`]).
+pub const EXPLAINED_SLOW_RATE: f32 = 0.02;
 
 /// What the filter thinks of its own estimate after an update.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash)]
@@ -79,6 +84,11 @@ pub struct QualityThresholds {
     /// The drop of the likelihood per beam (`slow − fast`, nats per beam) that, with
     /// `lost_explained_dropping`, is `Lost`.
     pub dropping_nats: f32,
+    /// A fall of the averaged explained share below its slow average (rate
+    /// [`EXPLAINED_SLOW_RATE`], about the last 50 scans) larger than this (0 to 1) is `Lost`:
+    /// a kidnapping into a place the map half explains, seen before the likelihood's slower
+    /// averages notice (1: off).
+    pub lost_explained_fall: f32,
     /// Updates in a row that meet a `Lost` condition before the state is `Lost` (they report
     /// `Uncertain` until then; at least 1): a scan or two the map explains poorly while the
     /// estimate is right (a doorway, people) is not a loss.
@@ -107,6 +117,7 @@ impl QualityThresholds {
         lost_explained: 0.35,
         lost_explained_dropping: 0.5,
         dropping_nats: 0.25,
+        lost_explained_fall: 0.4,
         lost_after: 2,
         spread_m: 0.25,
         spread_rad: 0.15,
@@ -125,6 +136,7 @@ impl QualityThresholds {
             && self.lost_explained <= self.tracking_explained
             && unit(self.lost_explained_dropping)
             && pos(self.dropping_nats)
+            && unit(self.lost_explained_fall)
             && self.lost_after >= 1
             && unit(self.concentration)
             && pos(self.explained_sigmas)
@@ -174,6 +186,7 @@ pub struct QualityReport {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct QualityState {
     explained_avg: f32,
+    explained_slow: f32,
     fast: f32,
     slow: f32,
     /// Updates in a row that met a `Lost` condition.
@@ -183,6 +196,7 @@ pub(super) struct QualityState {
 impl QualityState {
     pub(super) const NEW: Self = Self {
         explained_avg: f32::NAN,
+        explained_slow: f32::NAN,
         fast: f32::NAN,
         slow: f32::NAN,
         lost_conditions: 0,
@@ -210,6 +224,7 @@ impl QualityState {
         self.slow = follow(self.slow, ln_beam, LIKELIHOOD_SLOW_RATE);
         let e = explained.unwrap_or(f32::NAN);
         self.explained_avg = follow(self.explained_avg, e, EXPLAINED_RATE);
+        self.explained_slow = follow(self.explained_slow, e, EXPLAINED_SLOW_RATE);
         let var = |i: usize| {
             covariance
                 .get(i)
@@ -232,6 +247,7 @@ impl QualityState {
             let a = self.explained_avg;
             let state = if a < t.lost_explained
                 || (a < t.lost_explained_dropping && drop > t.dropping_nats)
+                || self.explained_slow - a > t.lost_explained_fall
             {
                 Quality::Lost
             } else if a < t.tracking_explained || wide {
@@ -290,9 +306,14 @@ impl QualityState {
 ///
 /// **Free-space resetting**, the last resort: after [`Resetting::reset_after`] updates in a row
 /// that reported [`Quality::Lost`] (expansion has not found the robot), the update replaces the
-/// share [`Resetting::reset_fraction`] of the set by poses uniform over the
+/// share [`Resetting::reset_fraction`] of the set by poses from the
 /// [`FreeSpace`](crate::field::FreeSpace) passed to the update (none without one), and the
-/// count starts again, as does the expansions' σ.
+/// count starts again, as does the expansions' σ. With [`Resetting::reset_candidates`] `k` > 1
+/// the new poses are chosen, not just drawn: `k` poses uniform over the free space are drawn and
+/// scored by this update's scan for every place to fill, and the best-scoring ones are kept
+/// (a sensor resetting in fixed memory: the candidates are scored one at a time and only the
+/// kept ones are stored, in the set itself). That costs `k` scorings per replaced particle, at
+/// reset updates only; with `k` ≤ 1 the poses are uniform draws, kept whatever they score.
 ///
 /// **Settle guard**: while the quality has been `Tracking` for [`Resetting::settled_after`]
 /// updates in a row, augmented MCL (Table 8.3) injects no random particles (a random particle
@@ -313,21 +334,27 @@ pub struct Resetting {
     pub reset_after: u16,
     /// Share of the particles a free-space reset replaces (0 to 1).
     pub reset_fraction: f32,
+    /// Candidate poses drawn and scored per replaced particle at a free-space reset, the best
+    /// kept (0 or 1: uniform draws, unscored).
+    pub reset_candidates: u16,
+
     /// Updates in a row of `Tracking` after which random injections stop (0: no guard).
     pub settled_after: u16,
 }
 
 impl Resetting {
     /// The defaults: expand below 0.4 explained, σ 0.1 m and 0.05 rad doubling up to 8 times
-    /// as much (0.8 m, 0.4 rad), a free-space reset of the whole set after 5 updates in a row
-    /// reported `Lost`, the settle guard after 20 updates of `Tracking`.
+    /// as much (0.8 m, 0.4 rad), a free-space reset of the whole set after 2 updates in a row
+    /// reported `Lost`, the best of 100 candidates for each particle it replaces, the settle
+    /// guard after 20 updates of `Tracking`.
     pub const DEFAULT: Self = Self {
         expand_below: 0.4,
         sigma_m: 0.1,
         sigma_rad: 0.05,
         max_doublings: 3,
-        reset_after: 5,
+        reset_after: 2,
         reset_fraction: 1.0,
+        reset_candidates: 100,
         settled_after: 20,
     };
 
