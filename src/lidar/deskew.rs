@@ -147,31 +147,12 @@ impl Deskewer {
         out: &mut Scan<N>,
     ) -> Result<DeskewReport, DeskewError> {
         out.clone_from(scan);
-        let (s, e, r) = (sweep.start, sweep.end, sweep.reference);
-        if !(s.is_finite() && e.is_finite() && r.is_finite()) {
-            return Err(DeskewError::NonFinitePose);
-        }
-        let span = sweep.end_deg - sweep.start_deg;
-        if !(sweep.start_deg.is_finite() && span.is_finite() && span > 0.0) {
-            return Err(DeskewError::BadAnchors);
-        }
-        // Relative motion in the reference frame: beam pose offset d0 + f·dv, heading
-        // h0 + f·w.
-        let (sin_r, cos_r) = math::sin_cos(r.theta_rad);
-        let rot = |x: f32, y: f32| (cos_r * x + sin_r * y, -sin_r * x + cos_r * y);
-        let (d0x, d0y) = rot(s.x_m - r.x_m, s.y_m - r.y_m);
-        let (dvx, dvy) = rot(e.x_m - s.x_m, e.y_m - s.y_m);
-        let h0 = wrap_angle(s.theta_rad - r.theta_rad);
-        let w = wrap_angle(e.theta_rad - s.theta_rad);
-        if d0x == 0.0 && d0y == 0.0 && dvx == 0.0 && dvy == 0.0 && h0 == 0.0 && w == 0.0 {
+        let Some(motion) = Motion::new(layout, sweep)? else {
             return Ok(DeskewReport {
                 still: true,
                 ..DeskewReport::default()
             });
-        }
-        let inv_span = 1.0 / span;
-        let mount = layout.mount();
-        let (sin_m, cos_m) = math::sin_cos(mount.yaw_rad);
+        };
         let max_r = layout.max_range_m();
         let n = layout.len().min(scan.len());
         let mut report = DeskewReport::default();
@@ -184,30 +165,7 @@ impl Deskewer {
             if !((range >= 0.0) & (range < max_r)) {
                 continue;
             }
-            // Rotor position of the beam, degrees clockwise in [0, 360).
-            let mut a = -beam.bearing_rad.to_degrees() % 360.0;
-            if a < 0.0 {
-                a += 360.0;
-            }
-            let f = (a - sweep.start_deg) * inv_span;
-            let (dx, dy) = (d0x + f * dvx, d0y + f * dvy);
-            let (sin_h, cos_h) = math::sin_cos(h0 + f * w);
-            // Endpoint in the robot frame at the beam's time.
-            let ux = cos_m * beam.cos - sin_m * beam.sin;
-            let uy = sin_m * beam.cos + cos_m * beam.sin;
-            let (px, py) = (mount.x_m + range * ux, mount.y_m + range * uy);
-            // In the reference robot frame, then relative to the sensor, in its own axes.
-            let qx = dx + cos_h * px - sin_h * py - mount.x_m;
-            let qy = dy + sin_h * px + cos_h * py - mount.y_m;
-            let (sx, sy) = (cos_m * qx + sin_m * qy, -sin_m * qx + cos_m * qy);
-            let r2 = math::sqrt(sx * sx + sy * sy);
-            let mut a2 = -math::atan2(sy, sx).to_degrees();
-            if a2 < 0.0 {
-                a2 += 360.0;
-            }
-            if !(0.0..360.0).contains(&a2) {
-                a2 = 0.0;
-            }
+            let (r2, a2) = motion.correct(beam, range);
             report.moved = report.moved.saturating_add(1);
             let Some(slot) =
                 self.bins
@@ -232,6 +190,117 @@ impl Deskewer {
             }
         }
         Ok(report)
+    }
+
+    /// The corrected endpoint of one reading before binning, as [`Deskewer::apply`] computes it:
+    /// `(range_m, bearing_rad)` in the sensor frame at the reference time (bearing
+    /// counter-clockwise, in `(−π, π]`), for `range_m` read on beam `index` of `layout`.
+    /// `Ok(None)` when `index` is past the layout; with no motion the reading itself.
+    ///
+    /// # Errors
+    /// As [`Deskewer::apply`].
+    pub fn correct_beam<const N: usize>(
+        &self,
+        layout: &BeamLayout<N>,
+        sweep: &Sweep,
+        index: usize,
+        range_m: f32,
+    ) -> Result<Option<(f32, f32)>, DeskewError> {
+        let Some(beam) = layout.beams().get(index) else {
+            return Ok(None);
+        };
+        Ok(Some(match Motion::new(layout, sweep)? {
+            None => (range_m, beam.bearing_rad),
+            Some(m) => {
+                let (r, a) = m.correct(beam, range_m);
+                (r, wrap_angle(-a.to_radians()))
+            }
+        }))
+    }
+}
+
+/// The per-revolution constants: the beam pose's offset from the reference `d0 + f·dv` and
+/// relative heading `h0 + f·w` (reference frame), and the mount.
+#[derive(Clone, Copy, Debug)]
+struct Motion {
+    start_deg: f32,
+    inv_span: f32,
+    d0: (f32, f32),
+    dv: (f32, f32),
+    h0: f32,
+    w: f32,
+    mount: crate::pose::SensorMount,
+    sin_m: f32,
+    cos_m: f32,
+}
+
+impl Motion {
+    /// `None` when there is no motion (every relative term exactly zero).
+    fn new<const N: usize>(
+        layout: &BeamLayout<N>,
+        sweep: &Sweep,
+    ) -> Result<Option<Self>, DeskewError> {
+        let (s, e, r) = (sweep.start, sweep.end, sweep.reference);
+        if !(s.is_finite() && e.is_finite() && r.is_finite()) {
+            return Err(DeskewError::NonFinitePose);
+        }
+        let span = sweep.end_deg - sweep.start_deg;
+        if !(sweep.start_deg.is_finite() && span.is_finite() && span > 0.0) {
+            return Err(DeskewError::BadAnchors);
+        }
+        let (sin_r, cos_r) = math::sin_cos(r.theta_rad);
+        let rot = |x: f32, y: f32| (cos_r * x + sin_r * y, -sin_r * x + cos_r * y);
+        let d0 = rot(s.x_m - r.x_m, s.y_m - r.y_m);
+        let dv = rot(e.x_m - s.x_m, e.y_m - s.y_m);
+        let h0 = wrap_angle(s.theta_rad - r.theta_rad);
+        let w = wrap_angle(e.theta_rad - s.theta_rad);
+        if d0 == (0.0, 0.0) && dv == (0.0, 0.0) && h0 == 0.0 && w == 0.0 {
+            return Ok(None);
+        }
+        let mount = layout.mount();
+        let (sin_m, cos_m) = math::sin_cos(mount.yaw_rad);
+        Ok(Some(Self {
+            start_deg: sweep.start_deg,
+            inv_span: 1.0 / span,
+            d0,
+            dv,
+            h0,
+            w,
+            mount,
+            sin_m,
+            cos_m,
+        }))
+    }
+
+    /// The corrected range (m) and clockwise angle (degrees, `[0, 360)`) of a reading.
+    #[inline(always)]
+    fn correct(&self, beam: &crate::scan::Beam, range: f32) -> (f32, f32) {
+        let (m, sin_m, cos_m) = (self.mount, self.sin_m, self.cos_m);
+        // Rotor position of the beam, degrees clockwise in [0, 360).
+        let mut a = -beam.bearing_rad.to_degrees() % 360.0;
+        if a < 0.0 {
+            a += 360.0;
+        }
+        let f = (a - self.start_deg) * self.inv_span;
+        let (dx, dy) = (self.d0.0 + f * self.dv.0, self.d0.1 + f * self.dv.1);
+        let (sin_h, cos_h) = math::sin_cos(self.h0 + f * self.w);
+        // Endpoint in the robot frame at the beam's time.
+        let ux = cos_m * beam.cos - sin_m * beam.sin;
+        let uy = sin_m * beam.cos + cos_m * beam.sin;
+        let (px, py) = (m.x_m + range * ux, m.y_m + range * uy);
+        // In the reference robot frame, then relative to the sensor, in its own axes.
+        let qx = dx + cos_h * px - sin_h * py - m.x_m;
+        let qy = dy + sin_h * px + cos_h * py - m.y_m;
+        let (sx, sy) = (cos_m * qx + sin_m * qy, -sin_m * qx + cos_m * qy);
+        let r2 = math::sqrt(sx * sx + sy * sy);
+        let mut a2 = -math::atan2(sy, sx).to_degrees();
+        if a2 < 0.0 {
+            a2 += 360.0;
+        }
+        if !(0.0..360.0).contains(&a2) {
+            a2 = 0.0;
+        }
+        (r2, a2)
     }
 }
 
