@@ -277,9 +277,11 @@ impl Motion {
     fn correct(&self, beam: &crate::scan::Beam, range: f32) -> (f32, f32) {
         let (m, sin_m, cos_m) = (self.mount, self.sin_m, self.cos_m);
         // Rotor position of the beam, degrees clockwise in [0, 360).
-        let mut a = -beam.bearing_rad.to_degrees() % 360.0;
-        if a < 0.0 {
-            a += 360.0;
+        // (A floor, not `%`: `fmodf` loops in software on a Cortex-M4F.)
+        let d = -beam.bearing_rad.to_degrees();
+        let mut a = d - 360.0 * math::floor(d * (1.0 / 360.0));
+        if !(0.0..360.0).contains(&a) {
+            a = 0.0;
         }
         let f = (a - self.start_deg) * self.inv_span;
         let (dx, dy) = (self.d0.0 + f * self.dv.0, self.d0.1 + f * self.dv.1);
