@@ -41,10 +41,11 @@
 //! model of the pose.
 //!
 //! # Cost per beam
-//! One `sin_cos` (of the beam's relative heading), one `sqrt`, one `atan2`, and about 30
-//! multiplies and adds (the layout's unit vectors are precomputed), the nearest-bin lookup of
-//! the assembler (one multiply), one compare-and-store. No allocation; the output is a second
-//! `Scan<N>` the caller provides.
+//! One `sin_cos` (of the beam's relative heading), one `sqrt`, one `atan2`, one `floor`, 24
+//! multiplies and about 20 adds (the layout's unit vectors are precomputed), the nearest-bin
+//! lookup of the assembler (one multiply), one compare-and-store: counted by hand, not yet
+//! under QEMU (docs/robot.md, "De-skew", has the measured effect and the cost). No allocation;
+//! the output is a second `Scan<N>` the caller provides.
 
 use super::assembler::{AssemblerError, Bins};
 use crate::math;
