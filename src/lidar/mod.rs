@@ -40,6 +40,7 @@
 //! [`Scan`]: crate::scan::Scan
 
 pub mod assembler;
+pub mod deskew;
 #[cfg(feature = "hal")]
 pub mod io;
 pub mod ld06;
@@ -48,7 +49,10 @@ mod sync;
 pub mod xv11;
 pub mod ydlidar;
 
-pub use assembler::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution, ScanAssembler};
+pub use assembler::{
+    AssemblerConfig, AssemblerError, AssemblerStats, Revolution, RevolutionTiming, ScanAssembler,
+};
+pub use deskew::{DeskewError, DeskewReport, Deskewer, Sweep};
 
 /// One point as a LiDAR reports it, in the sensor's own (clockwise) convention.
 ///

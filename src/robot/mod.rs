@@ -45,7 +45,7 @@ pub use window::{OdometryWindow, Sample};
 
 use crate::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use crate::lidar::ld06::{Ld06Decoder, TIMESTAMP_WRAP_MS};
-use crate::lidar::{AssemblerConfig, AssemblerStats, DecoderStats, ScanAssembler};
+use crate::lidar::{AssemblerConfig, AssemblerStats, DecoderStats, Deskewer, ScanAssembler, Sweep};
 use crate::link::{
     self, ErrorCode, ErrorReport, EstimateFlags, Frame, Heartbeat, LinkError, LinkStats, Message,
     MessageType, Quality, SetParameters, MAX_WIRE_LEN,
@@ -105,6 +105,12 @@ pub struct RobotConfig {
     pub heartbeat_every: u32,
     /// Seed of the filter's random generator.
     pub seed: u64,
+    /// De-skew every revolution for the motion during it before the update
+    /// ([`crate::lidar::deskew`]; docs/robot.md, "De-skew"): each beam's endpoint is moved into
+    /// the robot frame at the revolution's time, with the odometry interpolated at the
+    /// revolution's first and last stamps. A revolution is then processed once the odometry
+    /// reaches its last stamp (not only its middle). Off by default.
+    pub deskew: bool,
 }
 
 impl RobotConfig {
@@ -136,6 +142,7 @@ impl RobotConfig {
             update_min_a_rad: 0.0,
             heartbeat_every: 10,
             seed: 1,
+            deskew: false,
         })
     }
 }
@@ -168,6 +175,11 @@ pub struct RobotCounters {
     pub frames_sent: u32,
     /// Estimates or heartbeats that could not be encoded (never sent).
     pub encode_failures: u32,
+    /// Revolutions de-skewed before their update ([`RobotConfig::deskew`]).
+    pub deskewed: u32,
+    /// Revolutions updated without de-skew although it is on: no timestamps, no odometry at
+    /// the revolution's start or end (or only a stale one), or a pose that is not finite.
+    pub deskew_skipped: u32,
 }
 
 /// The stages of [`Robot::poll_probed`], for a caller that measures them (instruction counts
@@ -180,7 +192,8 @@ pub enum Stage {
     Lidar,
     /// The motion model's sample of every particle.
     Predict,
-    /// Preparing the scan and updating the filter (scoring, weights, estimate, resampling).
+    /// De-skewing the scan when [`RobotConfig::deskew`] is on, preparing it and updating the
+    /// filter (scoring, weights, estimate, resampling).
     Update,
     /// Encoding a frame and handing it to the sink.
     Send,
@@ -241,6 +254,17 @@ struct Queued {
 struct Revolution<const S: usize> {
     scan: Scan<S>,
     t_us: u64,
+    /// The timing anchors, for de-skew: device times of the first and last stamps, µs, and the
+    /// rotor positions they belong to, degrees clockwise.
+    sweep: Option<SweepTimes>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct SweepTimes {
+    start_us: u64,
+    end_us: u64,
+    start_deg: f32,
+    end_deg: f32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -276,6 +300,8 @@ pub struct Robot<'a, const N: usize, const S: usize> {
     force_update: bool,
     processed_us: u64,
     counters: RobotCounters,
+    deskewer: Option<Deskewer>,
+    deskewed: Scan<S>,
 }
 
 impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
@@ -315,6 +341,14 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         let mut assembler_config = AssemblerConfig::for_layout(&layout);
         assembler_config.max_range_m = config.max_range_m;
         let assembler = ScanAssembler::new(&layout, assembler_config)?;
+        let deskewer = if config.deskew {
+            Some(Deskewer::new(&layout).map_err(|e| match e {
+                crate::lidar::DeskewError::Layout(a) => Error::Assembler(a),
+                _ => Error::Assembler(crate::lidar::AssemblerError::NotUniform(0)),
+            })?)
+        } else {
+            None
+        };
         let mut robot = Self {
             config,
             layout,
@@ -340,6 +374,8 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             force_update: false,
             processed_us: 0,
             counters: RobotCounters::default(),
+            deskewer,
+            deskewed: Scan::default(),
         };
         if let Some(s) = seed {
             if s.pose.is_finite() {
@@ -387,7 +423,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             if self
                 .pending
                 .as_ref()
-                .is_some_and(|p| self.window.covers(p.t_us))
+                .is_some_and(|p| self.window.covers(self.ready_us(p)))
             {
                 break;
             }
@@ -402,7 +438,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             probe.leave(Stage::Lidar);
         }
         let ready = match &self.pending {
-            Some(p) => self.window.covers(p.t_us) || self.next.is_some(),
+            Some(p) => self.window.covers(self.ready_us(p)) || self.next.is_some(),
             None => false,
         };
         if ready {
@@ -491,23 +527,42 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         self.clock.now_us()
     }
 
+    /// The odometry time a revolution waits for: its time, or with de-skew on its last stamp.
+    fn ready_us(&self, rev: &Revolution<S>) -> u64 {
+        match (&self.deskewer, rev.sweep) {
+            (Some(_), Some(w)) => w.end_us.max(rev.t_us),
+            _ => rev.t_us,
+        }
+    }
+
     fn push_lidar_byte(&mut self, byte: u8) {
         let (assembler, clock) = (&mut self.assembler, &mut self.clock);
         let mut done: Option<Revolution<S>> = None;
         self.lidar.push_byte(byte, &mut |point| {
             if assembler.push(point).is_some() {
                 let r = assembler.revolution();
-                let t_us = match (r.start_timestamp_ms, r.end_timestamp_ms) {
+                let (t_us, stamps) = match (r.start_timestamp_ms, r.end_timestamp_ms) {
                     (Some(a), Some(b)) => {
                         let t0 = clock.advance(a);
                         let t1 = clock.advance(b);
-                        t0 + (t1 - t0) / 2
+                        (t0 + (t1 - t0) / 2, Some((t0, t1)))
                     }
-                    _ => clock.now_us(),
+                    _ => (clock.now_us(), None),
+                };
+                // The assembler's anchors are the same first and last stamps.
+                let sweep = match (stamps, assembler.timing()) {
+                    (Some((start_us, end_us)), Some(t)) => Some(SweepTimes {
+                        start_us,
+                        end_us,
+                        start_deg: t.start_deg,
+                        end_deg: t.end_deg,
+                    }),
+                    _ => None,
                 };
                 done = Some(Revolution {
                     scan: assembler.scan().clone(),
                     t_us,
+                    sweep,
                 });
             }
         });
@@ -847,7 +902,9 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         self.mcl.predict(&step, &mut self.rng);
         probe.leave(Stage::Predict);
         probe.enter(Stage::Update);
-        let prepared = self.model.prepare(&self.layout, &rev.scan);
+        let deskewed = self.deskewer.is_some() && self.deskew(rev, odom.map(|o| o.pose));
+        let scan = if deskewed { &self.deskewed } else { &rev.scan };
+        let prepared = self.model.prepare(&self.layout, scan);
         let update = self.mcl.update_prepared(&prepared, None, &mut self.rng);
         probe.leave(Stage::Update);
         let Ok(update) = update else {
@@ -887,6 +944,38 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
 
     fn skip(&mut self) {
         self.counters.skipped = self.counters.skipped.wrapping_add(1);
+    }
+
+    /// De-skews `rev` into `self.deskewed` for the odometry pose `reference` at its time;
+    /// `false` (counted) when it cannot: no timing, no fresh odometry at the start or end.
+    fn deskew(&mut self, rev: &Revolution<S>, reference: Option<Pose>) -> bool {
+        let gap = self.config.max_odometry_gap_us;
+        let fresh = |t: u64| self.window.at(t, gap).filter(|i| !i.stale).map(|i| i.pose);
+        let sweep = match (rev.sweep, reference) {
+            (Some(w), Some(reference)) => match (fresh(w.start_us), fresh(w.end_us)) {
+                (Some(start), Some(end)) => Some(Sweep {
+                    start_deg: w.start_deg,
+                    end_deg: w.end_deg,
+                    start,
+                    end,
+                    reference,
+                }),
+                _ => None,
+            },
+            _ => None,
+        };
+        let ok = match (sweep, &self.deskewer) {
+            (Some(sweep), Some(d)) => d
+                .apply(&self.layout, &rev.scan, &sweep, &mut self.deskewed)
+                .is_ok(),
+            _ => false,
+        };
+        if ok {
+            self.counters.deskewed = self.counters.deskewed.wrapping_add(1);
+        } else {
+            self.counters.deskew_skipped = self.counters.deskew_skipped.wrapping_add(1);
+        }
+        ok
     }
 
     /// Encodes and sends `message`; `false` when it could not be encoded (never sent).

@@ -477,3 +477,124 @@ fn global_localization_spreads_the_cloud_and_an_initial_pose_puts_it_right() {
         assert!(((e.pose.x_m - p.x_m).powi(2) + (e.pose.y_m - p.y_m).powi(2)).sqrt() < 0.05);
     }
 }
+
+/// `revolutions` LD06 revolutions at 10 Hz, each point ray-cast from `pose_at` at its own time
+/// within the turn (point `k`, at `k°` clockwise, is measured `k / 3600` s after the start).
+fn swept_lidar_stream(revolutions: usize, pose_at: impl Fn(u64) -> Pose) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    let mut rev = vec![0u8; ld06::revolution_len(BEAMS)];
+    for k in 0..revolutions {
+        let start_us = (k * 100_000) as u64;
+        let samples: Vec<Ld06Sample> = (0..BEAMS)
+            .map(|i| {
+                let t = start_us + (i as u64 * 100_000) / BEAMS as u64;
+                let r = range(&pose_at(t), -(i as f32).to_radians());
+                Ld06Sample::from_range_m(r, 200)
+            })
+            .collect();
+        let n =
+            ld06::encode_revolution(&samples, 3600, ((k * 100) % 30_000) as u16, &mut rev).unwrap();
+        bytes.extend_from_slice(&rev[..n]);
+    }
+    bytes
+}
+
+/// An initial pose at `pose_at(0)`, then odometry every 20 ms from `pose_at` up to `until_us`.
+fn swept_link_stream(until_us: u64, pose_at: impl Fn(u64) -> Pose) -> Vec<u8> {
+    let mut e = Encoder::new();
+    let mut out = frame(
+        &mut e,
+        Message::WheelOdometry(WheelOdometry {
+            timestamp_us: 0,
+            pose: pose_at(0),
+        }),
+    );
+    let cov = [[0.01, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.01]];
+    out.extend(frame(
+        &mut e,
+        Message::SetInitialPose(SetInitialPose {
+            timestamp_us: 0,
+            pose: pose_at(0),
+            covariance: cov,
+        }),
+    ));
+    let mut t = 20_000;
+    while t <= until_us {
+        out.extend(frame(
+            &mut e,
+            Message::WheelOdometry(WheelOdometry {
+                timestamp_us: t,
+                pose: pose_at(t),
+            }),
+        ));
+        t += 20_000;
+    }
+    out
+}
+
+fn run_with(
+    room: &Room,
+    lidar: &[u8],
+    link: &[u8],
+    config: RobotConfig,
+) -> (Collect, RobotCounters) {
+    let mut store = Particles::<CAP>::new();
+    let view = FieldView::parse(&room.blob).unwrap();
+    let free = FreeSpace::parse(&room.free).unwrap();
+    let mut robot =
+        Robot::<CAP, BEAMS>::new(&mut store, view, Some(free), layout(), config, None).unwrap();
+    let mut sink = Collect::default();
+    let (mut ls, mut ks) = (SliceSource::new(lidar), SliceSource::new(link));
+    for _ in 0..1_000_000 {
+        if robot.poll(&mut ls, &mut ks, &mut sink).is_idle() {
+            break;
+        }
+    }
+    (sink, robot.counters())
+}
+
+#[test]
+fn deskew_of_a_robot_standing_still_changes_no_estimate() {
+    let room = room();
+    let still = |_t: u64| Pose::new(2.0, 1.6, 0.4);
+    let lidar = swept_lidar_stream(12, still);
+    let link = swept_link_stream(1_300_000, still);
+    let (off, c_off) = run_with(&room, &lidar, &link, config());
+    let mut on_config = config();
+    on_config.deskew = true;
+    let (on, c_on) = run_with(&room, &lidar, &link, on_config);
+    assert_eq!(c_off.deskewed, 0);
+    assert!(c_on.updates >= 10, "{c_on:?}");
+    assert_eq!(c_on.deskewed, c_on.updates, "{c_on:?}");
+    assert_eq!(c_on.deskew_skipped, 0, "{c_on:?}");
+    assert_eq!(estimates(&off), estimates(&on));
+}
+
+#[test]
+fn deskew_of_a_turning_robot_runs_on_every_update_and_tracks() {
+    let room = room();
+    // 0.5 m/s forward while turning at 1.5 rad/s: a circle of 1/3 m radius around (3, 2).
+    let pose_at = |t_us: u64| {
+        let t = t_us as f32 * 1e-6;
+        let th = 1.5 * t;
+        Pose::new(3.0 + th.sin() / 3.0, 2.0 - th.cos() / 3.0, wrap_angle(th))
+    };
+    let lidar = swept_lidar_stream(20, pose_at);
+    let link = swept_link_stream(2_100_000, pose_at);
+    let mut c = config();
+    c.deskew = true;
+    let (on, counters) = run_with(&room, &lidar, &link, c);
+    let est = estimates(&on);
+    assert!(est.len() >= 18, "{counters:?}");
+    assert_eq!(counters.deskewed, counters.updates, "{counters:?}");
+    assert_eq!(counters.late_odometry, 0, "{counters:?}");
+    for e in &est {
+        let p = pose_at(e.timestamp_us);
+        let d = ((e.pose.x_m - p.x_m).powi(2) + (e.pose.y_m - p.y_m).powi(2)).sqrt();
+        assert!(d < 0.1, "{e:?} vs {p:?}");
+        assert!(
+            wrap_angle(e.pose.theta_rad - p.theta_rad).abs() < 0.05,
+            "{e:?}"
+        );
+    }
+}

@@ -6,8 +6,8 @@ use crate::scan::{BeamLayout, Scan};
 
 /// The geometry of a uniform layout, in degrees, for nearest-beam lookups.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Bins {
-    pub(super) beams: usize,
+pub(crate) struct Bins {
+    pub(crate) beams: usize,
     /// Layout start, degrees counter-clockwise, in `[0, 360)`.
     first_deg: f32,
     /// Beams per degree.
@@ -17,7 +17,7 @@ pub(super) struct Bins {
 }
 
 impl Bins {
-    pub(super) fn new<const N: usize>(layout: &BeamLayout<N>) -> Result<Self, AssemblerError> {
+    pub(crate) fn new<const N: usize>(layout: &BeamLayout<N>) -> Result<Self, AssemblerError> {
         let beams = layout.beams();
         let first_rad = beams.first().map_or(0.0, |b| b.bearing_rad);
         let step_rad = match beams {
@@ -56,7 +56,7 @@ impl Bins {
     /// The beam nearest to the clockwise angle `a` (degrees, `[0, 360)`) and the distance to
     /// it in beam steps (≤ 0.5), or `None` when no beam is within half a step.
     #[inline(always)]
-    pub(super) fn nearest(&self, a: f32) -> Option<(usize, f32)> {
+    pub(crate) fn nearest(&self, a: f32) -> Option<(usize, f32)> {
         // Bearing −a relative to the layout's first beam, brought into [0, 360].
         let mut rel = -a - self.first_deg; // in (−720, 0]
         rel += if rel < -360.0 { 720.0 } else { 360.0 };

@@ -101,3 +101,27 @@ pub struct Revolution {
     /// Sensor timestamp of the last point, milliseconds, if it has one.
     pub end_timestamp_ms: Option<u16>,
 }
+
+/// When the beams of the last emitted revolution were measured, as two anchors on the rotor:
+/// the revolution's first timestamp and the position of the point that carried it, and the
+/// position of the first point that carried its last timestamp.
+///
+/// Protocols such as the LD06 stamp a frame (twelve points) with the time of its first point,
+/// so the second anchor is the last frame's first point, not the revolution's last point. At a
+/// steady rotation rate the time of a point at rotor position `p` is then
+/// `start + (p − start_deg) / (end_deg − start_deg) · (end − start)` (points after the last
+/// stamp extrapolate the same line). `end_deg > start_deg` always.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RevolutionTiming {
+    /// Rotor position of the first timestamped point, degrees clockwise from the sensor's 0°
+    /// (within the revolution: about 0 after a wrap, slightly negative after a backward jitter).
+    pub start_deg: f32,
+    /// Its timestamp, milliseconds (protocol clock).
+    pub start_timestamp_ms: u16,
+    /// Rotor position of the first point that carried the revolution's last timestamp, degrees
+    /// clockwise, on the same unwrapped scale as `start_deg`.
+    pub end_deg: f32,
+    /// That timestamp, milliseconds (protocol clock).
+    pub end_timestamp_ms: u16,
+}

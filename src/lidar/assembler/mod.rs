@@ -25,7 +25,9 @@
 //! - **Empty beams** read NaN ([`crate::scan::Reading::Invalid`]): skipped and counted by every
 //!   model.
 //! - **Time.** [`Revolution`] carries the sensor timestamps of the first and last points of the
-//!   revolution (when the protocol has timestamps), so a caller can de-skew with odometry.
+//!   revolution (when the protocol has timestamps), and [`ScanAssembler::timing`] the rotor
+//!   positions those stamps belong to, so a caller can de-skew with odometry
+//!   ([`crate::lidar::deskew`]).
 //!
 //! The layout must be evenly spaced (any start, any positive step, up to a full turn): binning is
 //! then one multiply per point, with no search.
@@ -38,9 +40,9 @@ mod config;
 #[cfg(test)]
 mod tests;
 
-use bins::Bins;
+pub(crate) use bins::Bins;
 pub use bins::{full_turn_layout, sample_revolution};
-pub use config::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution};
+pub use config::{AssemblerConfig, AssemblerError, AssemblerStats, Revolution, RevolutionTiming};
 
 /// Assembles LiDAR points into one scan per revolution. See the module docs for the rules.
 #[derive(Clone, Debug)]
@@ -61,10 +63,14 @@ pub struct ScanAssembler<const N: usize> {
     /// Position and timestamp of the pending revolution's first and last timestamped points.
     rev_first: Option<(f32, u16)>,
     rev_last: Option<(f32, u16)>,
+    /// Position of the first point that carried the pending revolution's latest timestamp (for
+    /// [`ScanAssembler::timing`]: a frame's stamp is its first point's time).
+    rev_stamp: Option<(f32, u16)>,
     /// Rotation rate learnt from the last whole revolution, degrees per millisecond.
     rate_deg_per_ms: Option<f32>,
     out: Scan<N>,
     last: Revolution,
+    last_timing: Option<RevolutionTiming>,
     next_index: u32,
     stats: AssemblerStats,
 }
@@ -97,9 +103,11 @@ impl<const N: usize> ScanAssembler<N> {
             pos_deg: 0.0,
             rev_first: None,
             rev_last: None,
+            rev_stamp: None,
             rate_deg_per_ms: None,
             out,
             last: Revolution::default(),
+            last_timing: None,
             next_index: 0,
             stats: AssemblerStats::default(),
         })
@@ -125,6 +133,9 @@ impl<const N: usize> ScanAssembler<N> {
                 self.rev_first = Some((self.pos_deg, t));
             }
             self.rev_last = Some((self.pos_deg, t));
+            if self.rev_stamp.is_none_or(|(_, s)| s != t) {
+                self.rev_stamp = Some((self.pos_deg, t));
+            }
         }
         self.bin(&point, a);
         if turns > 0 {
@@ -246,12 +257,22 @@ impl<const N: usize> ScanAssembler<N> {
             start_timestamp_ms: self.rev_first.map(|(_, t)| t),
             end_timestamp_ms: self.rev_last.map(|(_, t)| t),
         };
+        self.last_timing = match (self.rev_first, self.rev_stamp) {
+            (Some((p0, t0)), Some((p1, t1))) if p1 > p0 => Some(RevolutionTiming {
+                start_deg: p0,
+                start_timestamp_ms: t0,
+                end_deg: p1,
+                end_timestamp_ms: t1,
+            }),
+            _ => None,
+        };
         self.next_index = self.next_index.wrapping_add(1);
         bump(&mut self.stats.revolutions);
         self.filled = 0;
         self.rev_points = 0;
         self.rev_first = None;
         self.rev_last = None;
+        self.rev_stamp = None;
     }
 
     /// Emits the pending revolution, if it received any point (for the end of a recording; a
@@ -277,6 +298,14 @@ impl<const N: usize> ScanAssembler<N> {
         self.last
     }
 
+    /// When the last emitted scan's beams were measured: the rotor positions at which its first
+    /// and last timestamps were taken (`None` without two distinct timestamped positions, e.g.
+    /// a protocol without timestamps, or a revolution of a single frame). See
+    /// [`RevolutionTiming`].
+    pub fn timing(&self) -> Option<RevolutionTiming> {
+        self.last_timing
+    }
+
     /// Counters so far.
     pub fn stats(&self) -> AssemblerStats {
         self.stats
@@ -300,6 +329,7 @@ impl<const N: usize> ScanAssembler<N> {
         self.rev_points = 0;
         self.rev_first = None;
         self.rev_last = None;
+        self.rev_stamp = None;
         self.prev_angle_deg = f32::NAN;
         self.prev_ms = None;
         self.rate_deg_per_ms = None;

@@ -415,3 +415,31 @@ fn a_whole_frame_with_impossible_content_ends_a_run_of_skipped_bytes() {
     assert!(pts.is_empty());
     assert_eq!((s.bad_frames, s.skipped_bytes, s.resyncs), (1, 5, 2));
 }
+
+#[test]
+fn assembler_timing_anchors_are_the_first_points_of_the_first_and_last_frames() {
+    use crate::lidar::assembler::{full_turn_layout, AssemblerConfig, ScanAssembler};
+    let samples: Vec<Ld06Sample> = (0..360)
+        .map(|_| Ld06Sample {
+            distance_mm: 1000,
+            intensity: 100,
+        })
+        .collect();
+    let layout = full_turn_layout::<360>(360, 12.0, crate::pose::SensorMount::CENTERED).unwrap();
+    let mut asm = ScanAssembler::new(&layout, AssemblerConfig::for_layout(&layout)).unwrap();
+    let mut d = Ld06Decoder::new();
+    let mut out = vec![0u8; revolution_len(360)];
+    let mut emitted = 0;
+    for rev in 0..3u16 {
+        encode_revolution(&samples, 3600, 100 + 100 * rev, &mut out).unwrap();
+        d.feed(&out, |p| emitted += usize::from(asm.push(p).is_some()));
+    }
+    assert_eq!(emitted, 2);
+    let t = asm.timing().unwrap();
+    // Revolution 1 (stamps 200 … 297 ms): frame 0 at 0°, frame 29 at 348°.
+    assert_eq!((t.start_timestamp_ms, t.end_timestamp_ms), (200, 297));
+    assert!(t.start_deg.abs() < 1e-3, "{t:?}");
+    assert!((t.end_deg - 348.0).abs() < 1e-3, "{t:?}");
+    // 348° in 97 ms: the encoder's rounding of 96.67 ms.
+    assert_eq!(asm.revolution().end_timestamp_ms, Some(297));
+}
