@@ -38,7 +38,7 @@ pub mod rng;
 pub use config::{
     MclConfig, MclError, Particles, Update, MAX_PARTICLES, MAX_RETRY_SCALE, RETRY_LEVEL_RATE,
 };
-pub use estimate::Estimate;
+pub use estimate::{diagonal_variances, Estimate};
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
 pub use motion::{
     MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M, MAX_ALPHA, MAX_STEP_M,

@@ -225,16 +225,9 @@ impl QualityState {
         let e = explained.unwrap_or(f32::NAN);
         self.explained_avg = follow(self.explained_avg, e, EXPLAINED_RATE);
         self.explained_slow = follow(self.explained_slow, e, EXPLAINED_SLOW_RATE);
-        let var = |i: usize| {
-            covariance
-                .get(i)
-                .and_then(|r| r.get(i))
-                .copied()
-                .unwrap_or(0.0)
-                .max(0.0)
-        };
-        let spread_m = crate::math::sqrt(var(0).max(var(1)));
-        let spread_rad = crate::math::sqrt(var(2));
+        let [vx, vy, vt] = super::estimate::diagonal_variances(covariance);
+        let spread_m = crate::math::sqrt(vx.max(vy));
+        let spread_rad = crate::math::sqrt(vt);
         let wide = !(spread_m <= t.spread_m
             && spread_rad <= t.spread_rad
             && concentration >= t.concentration);

@@ -739,16 +739,9 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     }
 
     fn init_around(&mut self, pose: &Pose, covariance: &[[f32; 3]; 3]) -> bool {
-        let c = |i: usize| {
-            covariance
-                .get(i)
-                .and_then(|r| r.get(i))
-                .copied()
-                .unwrap_or(0.0)
-                .max(0.0)
-        };
-        let sigma_xy = math::sqrt(0.5 * (c(0) + c(1))).max(self.config.min_init_sigma_xy_m);
-        let sigma_theta = math::sqrt(c(2)).max(self.config.min_init_sigma_theta_rad);
+        let [vx, vy, vt] = crate::mcl::diagonal_variances(covariance);
+        let sigma_xy = math::sqrt(0.5 * (vx + vy)).max(self.config.min_init_sigma_xy_m);
+        let sigma_theta = math::sqrt(vt).max(self.config.min_init_sigma_theta_rad);
         let ok = self
             .mcl
             .init_gaussian(
