@@ -6,6 +6,7 @@ use super::estimate::{Estimate, Moments};
 use super::motion::{sample_words, OdometryStep};
 use super::quality::{Quality, QualityReport, QualityState};
 use super::resample::{apply_counts, low_variance_counts_of_total};
+use super::unexplained::{classify, Unexplained};
 use crate::field::FreeSpace;
 use crate::gaussian::{standard_normal_pair, uniform_f32};
 use crate::math;
@@ -80,6 +81,9 @@ pub struct Mcl<'p, const N: usize> {
     expansions: u16,
     tracking_streak: u16,
     lost_streak: u16,
+    /// The last estimate moved by the odometry steps since (only while
+    /// [`MclConfig::with_unexplained`] is on): where the unexplained beams are classified.
+    prior: Pose,
 }
 
 impl<'p, const N: usize> Mcl<'p, N> {
@@ -111,6 +115,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             expansions: 0,
             tracking_streak: 0,
             lost_streak: 0,
+            prior: Pose::new(0.0, 0.0, 0.0),
         })
     }
 
@@ -142,6 +147,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.tracking_streak = 0;
         self.lost_streak = 0;
         self.estimate = Estimate::of(self.poses(), self.weights());
+        self.prior = self.estimate.pose;
     }
 
     /// Initializes `count` particles around `mean`: normal in x, y (σ `sigma_xy_m`, metres) and
@@ -262,6 +268,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             self.retry_sigma_theta_rad = 0.0;
             return;
         }
+        if self.config.unexplained.is_some() {
+            self.prior = step.apply(&self.prior);
+        }
         let sigmas = self.config.noise.sigmas(step);
         if self.config.retry() {
             let (s_rot1, s_trans, s_rot2) = sigmas;
@@ -291,8 +300,16 @@ impl<'p, const N: usize> Mcl<'p, N> {
 
     /// Replaces every particle `x` by `f(x)` (heading wrapped), keeping weights and the
     /// recovery averages: for a map-frame correction, or to simulate a kidnapping in a test.
-    /// A non-finite result leaves that particle where it was. Returns how many moved.
+    /// A non-finite result leaves that particle where it was. Returns how many moved. The
+    /// predicted estimate the unexplained beams are classified at
+    /// ([`MclConfig::with_unexplained`]) moves with them.
     pub fn move_particles<F: FnMut(&Pose) -> Pose>(&mut self, mut f: F) -> usize {
+        if self.config.unexplained.is_some() {
+            let q = f(&self.prior);
+            if q.is_finite() {
+                self.prior = Pose::new(q.x_m, q.y_m, wrap_angle(q.theta_rad));
+            }
+        }
         let mut moved = 0;
         for p in self.store.poses.iter_mut().take(self.len) {
             let q = f(p);
@@ -305,7 +322,10 @@ impl<'p, const N: usize> Mcl<'p, N> {
     }
 
     /// Reweights by a prepared tempered likelihood-field scan ([`TemperedScan::score`]; the
-    /// fast path) and finishes the update (see [`Mcl::update_with`]).
+    /// fast path) and finishes the update (see [`Mcl::update_with`]). With
+    /// [`MclConfig::with_unexplained`] on, the beams unmapped at the predicted estimate are left
+    /// out of the weighing ([`Update::unexplained`] counts them; the quality signal's explained
+    /// share is still taken over every beam).
     ///
     /// # Errors
     /// [`MclError::EmptyScan`] when the prepared scan keeps no beam (skipped, nothing
@@ -319,23 +339,66 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if scan.prepared().is_empty() {
             return Err(MclError::EmptyScan);
         }
-        let prepared = scan.prepared();
-        let per_beam = 1.0 / prepared.len() as f32;
+        if let Some(u) = self.config.unexplained {
+            return self.update_unexplained(scan, u, free, rng);
+        }
+        self.update_prepared_over(scan, scan, 0, free, rng)
+    }
+
+    /// [`Mcl::update_prepared`] with the unexplained beams left out (out of line: the stack of
+    /// the flags and of the reduced scan is taken only when the option is on).
+    #[inline(never)]
+    fn update_unexplained<R: Rng + ?Sized, const S: usize>(
+        &mut self,
+        scan: &TemperedScan<'_, S>,
+        u: Unexplained,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        let mut flags = [false; S];
+        let removed = classify(scan.prepared(), &self.prior, &u, &mut flags);
+        if removed == 0 {
+            return self.update_prepared_over(scan, scan, 0, free, rng);
+        }
+        let reduced = scan.retain(|j| !flags.get(j).copied().unwrap_or(false));
+        if reduced.prepared().is_empty() {
+            return self.update_prepared_over(scan, scan, 0, free, rng);
+        }
+        let removed = u16::try_from(removed).unwrap_or(u16::MAX);
+        self.update_prepared_over(&reduced, scan, removed, free, rng)
+    }
+
+    /// The prepared update: weights from `weigh`, the quality signal's explained share from
+    /// `whole` (both non-empty).
+    #[inline(always)]
+    fn update_prepared_over<R: Rng + ?Sized, const S: usize>(
+        &mut self,
+        weigh: &TemperedScan<'_, S>,
+        whole: &TemperedScan<'_, S>,
+        removed: u16,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        let per_beam = 1.0 / weigh.prepared().len() as f32;
         // The quality signal's explained share: one pass over the beams at the estimate.
+        let prepared = whole.prepared();
+        let share = 1.0 / prepared.len() as f32;
         let near_m = self.config.quality.explained_sigmas * prepared.field().params().sigma_hit_m();
         let explain = |p: &Pose| {
             let mut explained = 0u32;
             prepared.score_with(p, |_, d| explained += u32::from(d <= near_m));
-            Some(explained as f32 * per_beam)
+            Some(explained as f32 * share)
         };
         // The prepared scan scores a NaN or infinite pose NaN itself: no check per particle.
-        self.update_scaled::<false, _, _, _>(
-            |p| scan.score(p).log_likelihood,
+        let mut up = self.update_scaled::<false, _, _, _>(
+            |p| weigh.score(p).log_likelihood,
             per_beam,
             explain,
             free,
             rng,
-        )
+        )?;
+        up.unexplained = removed;
+        Ok(up)
     }
 
     /// Reweights by any [`SensorModel`] (e.g. a [`crate::Tempered`] beam model) and finishes the
@@ -486,6 +549,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             }
         }
         self.estimate = rw.estimate;
+        self.prior = rw.estimate.pose;
         let u = uniform_f32(rng);
         let m = if free.is_some() {
             ((n as f32 * random_fraction + u) as usize).min(n)
@@ -514,6 +578,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             quality: report,
             expanded,
             reset: reset && injected > 0,
+            unexplained: 0,
         })
     }
 
