@@ -241,7 +241,10 @@ fn scattered(
             rng.range(-std::f64::consts::PI, std::f64::consts::PI),
         );
         let a = f64::from(p.theta_rad) + b;
-        let (x, y) = (f64::from(p.x_m) + d * a.cos(), f64::from(p.y_m) + d * a.sin());
+        let (x, y) = (
+            f64::from(p.x_m) + d * a.cos(),
+            f64::from(p.y_m) + d * a.sin(),
+        );
         let o = if shelves && k % (2 * every) == 0 {
             Obstacle::Box {
                 x,
@@ -277,7 +280,9 @@ fn crowd_at_turns(input: &TrackInput, seed: u64) -> Vec<Obstacle> {
         let moved = f64::from(b.x_m - a.x_m).hypot(f64::from(b.y_m - a.y_m));
         let turned = f64::from(wrap_angle(b.theta_rad - a.theta_rad)).abs();
         let (x, y) = (f64::from(b.x_m), f64::from(b.y_m));
-        if moved < 0.1 && turned > 0.2 && places.iter().all(|&(px, py)| (px - x).hypot(py - y) > 2.0)
+        if moved < 0.1
+            && turned > 0.2
+            && places.iter().all(|&(px, py)| (px - x).hypot(py - y) > 2.0)
         {
             places.push((x, y));
         }
@@ -421,8 +426,14 @@ fn figures() {
             "people and shelves",
             scattered(&input, 1, 0.5, true, 0x7368_656c),
         ),
-        ("dense people", scattered(&input, 1, 0.6, false, 0x6465_6e73)),
-        ("crowd at in-place turns", crowd_at_turns(&input, 0x7475_726e)),
+        (
+            "dense people",
+            scattered(&input, 1, 0.6, false, 0x6465_6e73),
+        ),
+        (
+            "crowd at in-place turns",
+            crowd_at_turns(&input, 0x7475_726e),
+        ),
         ("false walls", false_walls(&input)),
     ];
     let settings = [
@@ -490,7 +501,10 @@ fn wall_case(input: &TrackInput, k0: usize, offset: f64) -> (Vec<f64>, Vec<f64>,
         .iter()
         .map(|p| wall.distance(f64::from(p.x_m), f64::from(p.y_m)))
         .fold(f64::INFINITY, f64::min);
-    assert!(gap >= 0.35, "stretch {k0}, offset {offset}: the path passes {gap:.2} m from the wall");
+    assert!(
+        gap >= 0.35,
+        "stretch {k0}, offset {offset}: the path passes {gap:.2} m from the wall"
+    );
     let (scans, _) = with_obstacles(input, &[wall]);
     let (mut off, mut on, mut removed) = (Vec::new(), Vec::new(), Vec::new());
     for seed in 1..=5 {
@@ -538,7 +552,12 @@ fn false_wall_cases() {
                 continue;
             }
             let (off, on, _) = wall_case(&input, k0, offset);
-            let f = |v: &[f64]| v.iter().map(|e| format!("{e:.2}")).collect::<Vec<_>>().join(" / ");
+            let f = |v: &[f64]| {
+                v.iter()
+                    .map(|e| format!("{e:.2}"))
+                    .collect::<Vec<_>>()
+                    .join(" / ")
+            };
             let over = |v: &[f64]| v.iter().filter(|&&e| e > 0.5).count();
             cases += 1;
             helped += usize::from(over(&on) < over(&off));

@@ -91,8 +91,10 @@ pub struct MclConfig {
     pub(super) quality: QualityThresholds,
     /// Expansion and free-space resetting, the settle guard; None: off.
     pub(super) resetting: Option<Resetting>,
-    /// Beams the map cannot explain left out of prepared updates; None: off.
-    pub(super) unexplained: Option<Unexplained>,
+    /// Beams the map cannot explain left out of prepared updates: the candidate distance
+    /// (metres; `+∞` is off) and the largest share removed.
+    pub(super) unexplained_distance_m: f32,
+    pub(super) unexplained_max_share: f32,
 }
 
 impl MclConfig {
@@ -132,7 +134,8 @@ impl MclConfig {
             retry_scale: 1.0,
             quality: QualityThresholds::DEFAULT,
             resetting: None,
-            unexplained: None,
+            unexplained_distance_m: f32::INFINITY,
+            unexplained_max_share: 0.0,
         })
     }
 
@@ -178,18 +181,24 @@ impl MclConfig {
     /// # Errors
     /// [`MclError::BadConfig`] when [`Unexplained::validate`] refuses the values.
     pub fn with_unexplained(self, unexplained: Option<Unexplained>) -> Result<Self, MclError> {
-        if unexplained.is_some_and(|u| !u.validate()) {
-            return Err(MclError::BadConfig);
-        }
+        let (unexplained_distance_m, unexplained_max_share) = match unexplained {
+            Some(u) if !u.validate() => return Err(MclError::BadConfig),
+            Some(u) => (u.distance_m, u.max_share),
+            None => (f32::INFINITY, 0.0),
+        };
         Ok(Self {
-            unexplained,
+            unexplained_distance_m,
+            unexplained_max_share,
             ..self
         })
     }
 
     /// The removal of unexplained beams, when on ([`MclConfig::with_unexplained`]).
-    pub fn unexplained(&self) -> Option<&Unexplained> {
-        self.unexplained.as_ref()
+    pub fn unexplained(&self) -> Option<Unexplained> {
+        (self.unexplained_distance_m < f32::INFINITY).then_some(Unexplained {
+            distance_m: self.unexplained_distance_m,
+            max_share: self.unexplained_max_share,
+        })
     }
 
     /// The resetting, when on ([`MclConfig::with_resetting`]).

@@ -81,9 +81,6 @@ pub struct Mcl<'p, const N: usize> {
     expansions: u16,
     tracking_streak: u16,
     lost_streak: u16,
-    /// The last estimate moved by the odometry steps since (only while
-    /// [`MclConfig::with_unexplained`] is on): where the unexplained beams are classified.
-    prior: Pose,
 }
 
 impl<'p, const N: usize> Mcl<'p, N> {
@@ -115,7 +112,6 @@ impl<'p, const N: usize> Mcl<'p, N> {
             expansions: 0,
             tracking_streak: 0,
             lost_streak: 0,
-            prior: Pose::new(0.0, 0.0, 0.0),
         })
     }
 
@@ -147,7 +143,6 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.tracking_streak = 0;
         self.lost_streak = 0;
         self.estimate = Estimate::of(self.poses(), self.weights());
-        self.prior = self.estimate.pose;
     }
 
     /// Initializes `count` particles around `mean`: normal in x, y (σ `sigma_xy_m`, metres) and
@@ -224,7 +219,10 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.len == 0
     }
 
-    /// The latest estimate (of the initial set, before any update).
+    /// The latest estimate (of the initial set, before any update). With
+    /// [`MclConfig::with_unexplained`] on, [`Mcl::predict`] moves its pose by each odometry
+    /// step (without noise; the covariance and ESS stay the update's): the predicted estimate,
+    /// where the next update classifies the beams.
     pub fn estimate(&self) -> &Estimate {
         &self.estimate
     }
@@ -268,8 +266,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             self.retry_sigma_theta_rad = 0.0;
             return;
         }
-        if self.config.unexplained.is_some() {
-            self.prior = step.apply(&self.prior);
+        if self.config.unexplained().is_some() {
+            // The predicted estimate, where the next update classifies the beams.
+            self.estimate.pose = step.apply(&self.estimate.pose);
         }
         let sigmas = self.config.noise.sigmas(step);
         if self.config.retry() {
@@ -300,14 +299,13 @@ impl<'p, const N: usize> Mcl<'p, N> {
 
     /// Replaces every particle `x` by `f(x)` (heading wrapped), keeping weights and the
     /// recovery averages: for a map-frame correction, or to simulate a kidnapping in a test.
-    /// A non-finite result leaves that particle where it was. Returns how many moved. The
-    /// predicted estimate the unexplained beams are classified at
-    /// ([`MclConfig::with_unexplained`]) moves with them.
+    /// A non-finite result leaves that particle where it was. Returns how many moved. With
+    /// [`MclConfig::with_unexplained`] on, the estimate's pose moves with them.
     pub fn move_particles<F: FnMut(&Pose) -> Pose>(&mut self, mut f: F) -> usize {
-        if self.config.unexplained.is_some() {
-            let q = f(&self.prior);
+        if self.config.unexplained().is_some() {
+            let q = f(&self.estimate.pose);
             if q.is_finite() {
-                self.prior = Pose::new(q.x_m, q.y_m, wrap_angle(q.theta_rad));
+                self.estimate.pose = Pose::new(q.x_m, q.y_m, wrap_angle(q.theta_rad));
             }
         }
         let mut moved = 0;
@@ -339,7 +337,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if scan.prepared().is_empty() {
             return Err(MclError::EmptyScan);
         }
-        if let Some(u) = self.config.unexplained {
+        if let Some(u) = self.config.unexplained() {
             return self.update_unexplained(scan, u, free, rng);
         }
         self.update_prepared_over(scan, scan, 0, free, rng)
@@ -356,16 +354,17 @@ impl<'p, const N: usize> Mcl<'p, N> {
         rng: &mut R,
     ) -> Result<Update, MclError> {
         let mut flags = [false; S];
-        let removed = classify(scan.prepared(), &self.prior, &u, &mut flags);
-        if removed == 0 {
-            return self.update_prepared_over(scan, scan, 0, free, rng);
-        }
-        let reduced = scan.retain(|j| !flags.get(j).copied().unwrap_or(false));
-        if reduced.prepared().is_empty() {
-            return self.update_prepared_over(scan, scan, 0, free, rng);
-        }
-        let removed = u16::try_from(removed).unwrap_or(u16::MAX);
-        self.update_prepared_over(&reduced, scan, removed, free, rng)
+        let at = self.estimate.pose;
+        let removed = classify(scan.prepared(), &at, &u, &mut flags);
+        let reduced = (removed > 0)
+            .then(|| scan.retain(|j| !flags.get(j).copied().unwrap_or(false)))
+            .filter(|r| !r.prepared().is_empty());
+        // One call site, so that the scoring loop is inlined once here.
+        let (weigh, removed) = match &reduced {
+            Some(r) => (r, u16::try_from(removed).unwrap_or(u16::MAX)),
+            None => (scan, 0),
+        };
+        self.update_prepared_over(weigh, scan, removed, free, rng)
     }
 
     /// The prepared update: weights from `weigh`, the quality signal's explained share from
@@ -549,7 +548,6 @@ impl<'p, const N: usize> Mcl<'p, N> {
             }
         }
         self.estimate = rw.estimate;
-        self.prior = rw.estimate.pose;
         let u = uniform_f32(rng);
         let m = if free.is_some() {
             ((n as f32 * random_fraction + u) as usize).min(n)

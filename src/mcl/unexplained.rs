@@ -4,7 +4,8 @@
 //!
 //! # The classification (once per update, at the predicted estimate)
 //! The pose is the last update's estimate moved by the odometry steps given since
-//! ([`Mcl::predict`](super::Mcl::predict), without noise). With the robot there, a kept beam of
+//! ([`Mcl::predict`](super::Mcl::predict) moves [`Mcl::estimate`](super::Mcl::estimate)'s pose
+//! while the option is on, without noise; no memory is added to the filter). With the robot there, a kept beam of
 //! the prepared scan is **unmapped** when
 //! 1. its endpoint lies farther than [`Unexplained::distance_m`] from any obstacle of the map
 //!    (the distance the likelihood field reads for it), and
@@ -126,4 +127,112 @@ pub(crate) fn classify<const S: usize>(
         return 0;
     }
     removed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{emit_blob, FieldHeader, FieldView, LikelihoodField, LikelihoodParams};
+    use crate::scan::{BeamLayout, Scan};
+    use crate::SensorMount;
+
+    /// A 4 m × 4 m room of 0.1 m cells at (0, 0), walls on its border; codes from a brute-force
+    /// distance.
+    fn room() -> Vec<u8> {
+        let n = 40i32;
+        let h = FieldHeader::new(n as u32, n as u32, 0.1, 0.0, 0.0);
+        let mut codes = vec![0u8; (n * n) as usize];
+        for r in 0..n {
+            for c in 0..n {
+                let d = [c, r, n - 1 - c, n - 1 - r].into_iter().min().unwrap_or(0);
+                codes[(r * n + c) as usize] = h.encode_distance_m(f64::from(d) * 0.1);
+            }
+        }
+        let mut out = vec![0; h.required_len().unwrap()];
+        emit_blob(&h, &codes, &mut out).unwrap();
+        out
+    }
+
+    /// The robot at the room's centre facing +x, 36 beams every 10°, ranges to the walls
+    /// (from the cell centres of the border, 0.05 m inside it) except those given.
+    fn classify_scan(change: impl Fn(usize, f32) -> f32, u: &Unexplained) -> (usize, [bool; 36]) {
+        let blob = room();
+        let view = FieldView::parse(&blob).unwrap();
+        let params = LikelihoodParams::new(0.95, 0.05, 0.05, 10.0).unwrap();
+        let field = LikelihoodField::new(view, params);
+        let step = core::f32::consts::PI / 18.0;
+        let layout = BeamLayout::<36>::uniform(0.0, step, 36, 10.0, SensorMount::CENTERED).unwrap();
+        let ranges: Vec<f32> = (0..36)
+            .map(|i| {
+                let a = i as f32 * step;
+                // Distance from (2, 2) to the square of half-side 1.95 m along a.
+                let t = 1.95 / a.cos().abs().max(a.sin().abs());
+                change(i, t)
+            })
+            .collect();
+        let scan = Scan::<36>::from_ranges(&ranges).unwrap();
+        let prepared = field.prepare(&layout, &scan);
+        let mut flags = [false; 36];
+        let k = classify(&prepared, &Pose::new(2.0, 2.0, 0.0), u, &mut flags);
+        (k, flags)
+    }
+
+    #[test]
+    fn short_readings_far_from_walls_are_unmapped() {
+        let u = Unexplained::DEFAULT;
+        // Clean: nothing.
+        let (k, flags) = classify_scan(|_, t| t, &u);
+        assert_eq!(k, 0);
+        assert!(flags.iter().all(|&f| !f));
+        // Beams 3–6 stopped 1 m from the robot by something in the room: unmapped. Beam 9
+        // stopped 0.1 m before the wall: explained (near an obstacle), kept.
+        let (k, flags) = classify_scan(
+            |i, t| match i {
+                3..=6 => 1.0,
+                9 => t - 0.1,
+                _ => t,
+            },
+            &u,
+        );
+        assert_eq!(k, 4, "{flags:?}");
+        assert!((3..=6).all(|i| flags[i]) && !flags[9]);
+        // Long readings (through the wall, 1 m beyond it): far from every obstacle but not
+        // short, so kept.
+        let (k, _) = classify_scan(|i, t| if (20..=23).contains(&i) { t + 1.0 } else { t }, &u);
+        assert_eq!(k, 0);
+        // More than the share: none.
+        let (k, flags) = classify_scan(|i, t| if i < 20 { 1.0 } else { t }, &u);
+        assert_eq!(k, 0);
+        assert!(flags.iter().all(|&f| !f));
+        let all = Unexplained {
+            max_share: 1.0,
+            ..u
+        };
+        assert_eq!(
+            classify_scan(|i, t| if i < 20 { 1.0 } else { t }, &all).0,
+            20
+        );
+    }
+
+    #[test]
+    fn parameters_are_validated() {
+        assert!(Unexplained::DEFAULT.validate());
+        for (d, s) in [
+            (0.0, 0.5),
+            (-1.0, 0.5),
+            (f32::NAN, 0.5),
+            (f32::INFINITY, 0.5),
+            (0.3, 1.5),
+            (0.3, f32::NAN),
+        ] {
+            assert!(
+                !Unexplained {
+                    distance_m: d,
+                    max_share: s
+                }
+                .validate(),
+                "{d} {s}"
+            );
+        }
+    }
 }
