@@ -415,7 +415,7 @@ fn min_med_max(v: &[f64], scale: f64, digits: usize) -> String {
 
 /// The table of docs/localization.md: 10 seeds per row, the whole log.
 #[test]
-#[ignore = "long: 10 seeds × 4 scenes × 3 settings of the whole log; run with --release --ignored --nocapture"]
+#[ignore = "long: 10 seeds × 6 scenes × 3 settings of the whole log; run with --release --ignored --nocapture"]
 fn figures() {
     let input = intel_input();
     let n = input.scans.len();
