@@ -154,6 +154,15 @@ impl<const N: usize> TemperedScan<'_, N> {
     pub fn prepared(&self) -> &PreparedScan<'_, N> {
         &self.prepared
     }
+
+    /// The same tempered scan over the beams `j` for which `keep(j)` is true
+    /// ([`PreparedScan::retain`]).
+    pub fn retain<K: FnMut(usize) -> bool>(&self, keep: K) -> Self {
+        Self {
+            prepared: self.prepared.retain(keep),
+            inv_kappa: self.inv_kappa,
+        }
+    }
 }
 
 /// Errors normalizing log-weights. The caller's slice is left unchanged on every error.

@@ -54,6 +54,7 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         retry: None,
         resample_ess: 0.5,
         scans,
+        unexplained: None,
     }
 }
 

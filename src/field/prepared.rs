@@ -74,6 +74,8 @@ pub struct PreparedScan<'f, const N: usize> {
     limit_y_hi: f32,
     /// Counts as [`ScanScore`] reports them (`log_likelihood` unused).
     counts: ScanScore,
+    /// The sensor's position in the robot frame (the mount's offset), metres.
+    sensor_m: [f32; 2],
 }
 
 impl<'a> LikelihoodField<'a> {
@@ -179,6 +181,7 @@ impl<'a> LikelihoodField<'a> {
                 invalid: sat16(invalid),
                 unpaired: sat16(ranges.len().saturating_sub(layout.len())),
             },
+            sensor_m: [mount.x_m, mount.y_m],
         }
     }
 }
@@ -369,6 +372,50 @@ impl<'f, const N: usize> PreparedScan<'f, N> {
     /// `frac_bits() + 2` fractional bits.
     pub fn endpoints(&self) -> &[[i32; 2]] {
         &self.points
+    }
+
+    /// A copy keeping only the beams `j` (kept-beam index, as in [`PreparedScan::score_with`])
+    /// for which `keep(j)` is true, in the same order; its counts report the beams left as
+    /// `scored` (the other counts are this scan's). Every beam left scores exactly as here at
+    /// every pose (the fast path's limits, computed for the whole scan's reach, hold for any
+    /// subset of it). Memory: one more `PreparedScan<N>` (8 bytes per beam of capacity `N`
+    /// plus the header), wherever the caller puts it.
+    pub fn retain<K: FnMut(usize) -> bool>(&self, mut keep: K) -> Self {
+        let mut points = Vec::new();
+        for (j, p) in self.points.iter().enumerate() {
+            if keep(j) {
+                // At most as many as `self.points`, which fit the same capacity.
+                let _ = points.push(*p);
+            }
+        }
+        let dropped = self.points.len().saturating_sub(points.len()) as u32;
+        let counts = ScanScore {
+            scored: sat16(points.len() as u32),
+            invalid: sat16(u32::from(self.counts.invalid).saturating_add(dropped)),
+            ..self.counts
+        };
+        Self {
+            points,
+            counts,
+            ..*self
+        }
+    }
+
+    /// The sensor's position in the map frame (metres) with the robot at `pose`.
+    pub fn sensor_at(&self, pose: &Pose) -> (f32, f32) {
+        let (s, c) = math::sin_cos(pose.theta_rad);
+        let [x, y] = self.sensor_m;
+        (pose.x_m + c * x - s * y, pose.y_m + s * x + c * y)
+    }
+
+    /// Kept beam `j`'s endpoint in the map frame (metres) with the robot at `pose` (`f32`, from
+    /// the stored fixed-point endpoint), or `None` past the last kept beam. `sin_cos` is the
+    /// pose's heading's sine and cosine (the caller computes them once per pose).
+    pub fn endpoint_at(&self, pose: &Pose, (s, c): (f32, f32), j: usize) -> Option<(f32, f32)> {
+        let p = self.points.get(j)?;
+        let to_m = pow2(-(self.frac_bits as i32) - 2) * self.field.view().cell_size_m();
+        let (x, y) = (p[0] as f32 * to_m, p[1] as f32 * to_m);
+        Some((pose.x_m + c * x - s * y, pose.y_m + s * x + c * y))
     }
 }
 

@@ -3,6 +3,7 @@
 use super::estimate::Estimate;
 use super::motion::OdometryNoise;
 use super::quality::{QualityReport, QualityThresholds, Resetting};
+use super::unexplained::Unexplained;
 use crate::pose::Pose;
 
 /// Largest particle capacity: the resampling scratch holds one `u16` count per particle.
@@ -90,6 +91,10 @@ pub struct MclConfig {
     pub(super) quality: QualityThresholds,
     /// Expansion and free-space resetting, the settle guard; None: off.
     pub(super) resetting: Option<Resetting>,
+    /// Beams the map cannot explain left out of prepared updates: the candidate distance
+    /// (metres; `+∞` is off) and the largest share removed.
+    pub(super) unexplained_distance_m: f32,
+    pub(super) unexplained_max_share: f32,
 }
 
 impl MclConfig {
@@ -129,6 +134,8 @@ impl MclConfig {
             retry_scale: 1.0,
             quality: QualityThresholds::DEFAULT,
             resetting: None,
+            unexplained_distance_m: f32::INFINITY,
+            unexplained_max_share: 0.0,
         })
     }
 
@@ -161,6 +168,37 @@ impl MclConfig {
             return Err(MclError::BadConfig);
         }
         Ok(Self { resetting, ..self })
+    }
+
+    /// Turns on the removal of beams the map cannot explain from
+    /// [`Mcl::update_prepared`](super::Mcl::update_prepared) (off by default; `None` turns it
+    /// off): at each update the beams that are unmapped at the predicted estimate (far from
+    /// every obstacle and short of the mapped wall behind them,
+    /// [`unexplained`](super::unexplained)) are left out of the weighing of every particle. The
+    /// other updates ([`Mcl::update_model`](super::Mcl::update_model),
+    /// [`Mcl::update_with`](super::Mcl::update_with)) ignore it.
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`Unexplained::validate`] refuses the values.
+    pub fn with_unexplained(self, unexplained: Option<Unexplained>) -> Result<Self, MclError> {
+        let (unexplained_distance_m, unexplained_max_share) = match unexplained {
+            Some(u) if !u.validate() => return Err(MclError::BadConfig),
+            Some(u) => (u.distance_m, u.max_share),
+            None => (f32::INFINITY, 0.0),
+        };
+        Ok(Self {
+            unexplained_distance_m,
+            unexplained_max_share,
+            ..self
+        })
+    }
+
+    /// The removal of unexplained beams, when on ([`MclConfig::with_unexplained`]).
+    pub fn unexplained(&self) -> Option<Unexplained> {
+        (self.unexplained_distance_m < f32::INFINITY).then_some(Unexplained {
+            distance_m: self.unexplained_distance_m,
+            max_share: self.unexplained_max_share,
+        })
     }
 
     /// The resetting, when on ([`MclConfig::with_resetting`]).
@@ -247,4 +285,7 @@ pub struct Update {
     /// True when this update's resampling was a free-space reset (the particles replaced are
     /// counted in `injected`).
     pub reset: bool,
+    /// Beams left out of this update as unexplained by the map
+    /// ([`MclConfig::with_unexplained`]; 0 when off).
+    pub unexplained: u16,
 }

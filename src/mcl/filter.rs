@@ -6,6 +6,7 @@ use super::estimate::{Estimate, Moments};
 use super::motion::{sample_words, OdometryStep};
 use super::quality::{Quality, QualityReport, QualityState};
 use super::resample::{apply_counts, low_variance_counts_of_total};
+use super::unexplained::{classify, Unexplained};
 use crate::field::FreeSpace;
 use crate::gaussian::{standard_normal_pair, uniform_f32};
 use crate::math;
@@ -218,7 +219,10 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.len == 0
     }
 
-    /// The latest estimate (of the initial set, before any update).
+    /// The latest estimate (of the initial set, before any update). With
+    /// [`MclConfig::with_unexplained`] on, [`Mcl::predict`] moves its pose by each odometry
+    /// step (without noise; the covariance and ESS stay the update's): the predicted estimate,
+    /// where the next update classifies the beams.
     pub fn estimate(&self) -> &Estimate {
         &self.estimate
     }
@@ -262,6 +266,10 @@ impl<'p, const N: usize> Mcl<'p, N> {
             self.retry_sigma_theta_rad = 0.0;
             return;
         }
+        if self.config.unexplained().is_some() {
+            // The predicted estimate, where the next update classifies the beams.
+            self.estimate.pose = step.apply(&self.estimate.pose);
+        }
         let sigmas = self.config.noise.sigmas(step);
         if self.config.retry() {
             let (s_rot1, s_trans, s_rot2) = sigmas;
@@ -291,8 +299,15 @@ impl<'p, const N: usize> Mcl<'p, N> {
 
     /// Replaces every particle `x` by `f(x)` (heading wrapped), keeping weights and the
     /// recovery averages: for a map-frame correction, or to simulate a kidnapping in a test.
-    /// A non-finite result leaves that particle where it was. Returns how many moved.
+    /// A non-finite result leaves that particle where it was. Returns how many moved. With
+    /// [`MclConfig::with_unexplained`] on, the estimate's pose moves with them.
     pub fn move_particles<F: FnMut(&Pose) -> Pose>(&mut self, mut f: F) -> usize {
+        if self.config.unexplained().is_some() {
+            let q = f(&self.estimate.pose);
+            if q.is_finite() {
+                self.estimate.pose = Pose::new(q.x_m, q.y_m, wrap_angle(q.theta_rad));
+            }
+        }
         let mut moved = 0;
         for p in self.store.poses.iter_mut().take(self.len) {
             let q = f(p);
@@ -305,7 +320,10 @@ impl<'p, const N: usize> Mcl<'p, N> {
     }
 
     /// Reweights by a prepared tempered likelihood-field scan ([`TemperedScan::score`]; the
-    /// fast path) and finishes the update (see [`Mcl::update_with`]).
+    /// fast path) and finishes the update (see [`Mcl::update_with`]). With
+    /// [`MclConfig::with_unexplained`] on, the beams unmapped at the predicted estimate are left
+    /// out of the weighing ([`Update::unexplained`] counts them; the quality signal's explained
+    /// share is still taken over every beam).
     ///
     /// # Errors
     /// [`MclError::EmptyScan`] when the prepared scan keeps no beam (skipped, nothing
@@ -319,23 +337,67 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if scan.prepared().is_empty() {
             return Err(MclError::EmptyScan);
         }
-        let prepared = scan.prepared();
-        let per_beam = 1.0 / prepared.len() as f32;
+        if let Some(u) = self.config.unexplained() {
+            return self.update_unexplained(scan, u, free, rng);
+        }
+        self.update_prepared_over(scan, scan, 0, free, rng)
+    }
+
+    /// [`Mcl::update_prepared`] with the unexplained beams left out (out of line: the stack of
+    /// the flags and of the reduced scan is taken only when the option is on).
+    #[inline(never)]
+    fn update_unexplained<R: Rng + ?Sized, const S: usize>(
+        &mut self,
+        scan: &TemperedScan<'_, S>,
+        u: Unexplained,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        let mut flags = [false; S];
+        let at = self.estimate.pose;
+        let removed = classify(scan.prepared(), &at, &u, &mut flags);
+        let reduced = (removed > 0)
+            .then(|| scan.retain(|j| !flags.get(j).copied().unwrap_or(false)))
+            .filter(|r| !r.prepared().is_empty());
+        // One call site, so that the scoring loop is inlined once here.
+        let (weigh, removed) = match &reduced {
+            Some(r) => (r, u16::try_from(removed).unwrap_or(u16::MAX)),
+            None => (scan, 0),
+        };
+        self.update_prepared_over(weigh, scan, removed, free, rng)
+    }
+
+    /// The prepared update: weights from `weigh`, the quality signal's explained share from
+    /// `whole` (both non-empty).
+    #[inline(always)]
+    fn update_prepared_over<R: Rng + ?Sized, const S: usize>(
+        &mut self,
+        weigh: &TemperedScan<'_, S>,
+        whole: &TemperedScan<'_, S>,
+        removed: u16,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> Result<Update, MclError> {
+        let per_beam = 1.0 / weigh.prepared().len() as f32;
         // The quality signal's explained share: one pass over the beams at the estimate.
+        let prepared = whole.prepared();
+        let share = 1.0 / prepared.len() as f32;
         let near_m = self.config.quality.explained_sigmas * prepared.field().params().sigma_hit_m();
         let explain = |p: &Pose| {
             let mut explained = 0u32;
             prepared.score_with(p, |_, d| explained += u32::from(d <= near_m));
-            Some(explained as f32 * per_beam)
+            Some(explained as f32 * share)
         };
         // The prepared scan scores a NaN or infinite pose NaN itself: no check per particle.
-        self.update_scaled::<false, _, _, _>(
-            |p| scan.score(p).log_likelihood,
+        let mut up = self.update_scaled::<false, _, _, _>(
+            |p| weigh.score(p).log_likelihood,
             per_beam,
             explain,
             free,
             rng,
-        )
+        )?;
+        up.unexplained = removed;
+        Ok(up)
     }
 
     /// Reweights by any [`SensorModel`] (e.g. a [`crate::Tempered`] beam model) and finishes the
@@ -504,6 +566,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
                     quality: report,
                     expanded,
                     reset: replaced > 0,
+                    unexplained: 0,
                 });
             }
         }
@@ -535,6 +598,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             quality: report,
             expanded,
             reset: reset && injected > 0,
+            unexplained: 0,
         })
     }
 

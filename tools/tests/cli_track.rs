@@ -17,6 +17,7 @@ fn help_explains_the_command() {
         "--init",
         "--kidnap",
         "--seed",
+        "--unexplained",
     ] {
         assert!(text.contains(word), "help lacks {word}");
     }
@@ -83,6 +84,17 @@ fn global_init_needs_the_free_space_section() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["scans"], 2);
+    // The removal of unexplained beams runs; a distance of 0 is refused as a usage error.
+    let out = run(&["--unexplained", "0.25,0.5"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = run(&["--unexplained", "0,0.5"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--unexplained"), "{err}");
     // With the section appended, global initialization runs.
     let grid = FreeSpaceGrid::of_view(&beamfield::field::FieldView::parse(&blob).unwrap());
     let flags: Vec<bool> = (0..1600u32)

@@ -3,7 +3,7 @@
 use crate::cmd::scored_log::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::mcl::{
-    Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64,
+    Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64, Unexplained,
 };
 use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, Tempered};
 use std::io::IsTerminal;
@@ -44,6 +44,9 @@ pub struct RunOptions {
     pub resample_ess: f32,
     /// Scans to run (at most the log's).
     pub scans: usize,
+    /// Beams the map cannot explain left out of each update (distance in metres, largest
+    /// share); None: off (`MclConfig::with_unexplained`, product weighting only).
+    pub unexplained: Option<(f32, f32)>,
 }
 
 /// The outcome of one run.
@@ -190,6 +193,12 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             .map_err(|e| usage(format!("--retry: {e}")))?,
         None => config,
     };
+    let config = config
+        .with_unexplained(o.unexplained.map(|(distance_m, max_share)| Unexplained {
+            distance_m,
+            max_share,
+        }))
+        .map_err(|e| usage(format!("--unexplained: {e}")))?;
     let lf = LikelihoodField::new(view, input.params);
     let model = Tempered::new(lf, o.kappa, o.stride)
         .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;

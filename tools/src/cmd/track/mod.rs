@@ -97,6 +97,14 @@ pub struct TrackArgs {
     /// "-inf" retries at every update (a second scoring pass each time), e.g. "--retry=-inf,0.5".
     #[arg(long, allow_hyphen_values = true)]
     pub retry: Option<String>,
+    /// Leave out beams the map cannot explain, "DISTANCE,SHARE" (off by default;
+    /// MclConfig::with_unexplained, product weighting only): at each update, a beam whose
+    /// endpoint at the predicted estimate lies more than DISTANCE metres from every obstacle
+    /// and whose ray reaches it without crossing a mapped wall (something unmapped in front)
+    /// is left out for every particle; none when more than SHARE (0 to 1) of the beams would
+    /// be. E.g. "--unexplained 0.25,0.5".
+    #[arg(long)]
+    pub unexplained: Option<String>,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -142,6 +150,13 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         }
         None => None,
     };
+    let unexplained = match &args.unexplained {
+        Some(text) => {
+            let v = parse_list(text, "--unexplained", 2)?;
+            Some((v[0], v[1]))
+        }
+        None => None,
+    };
     Ok(RunOptions {
         particles: args.particles,
         kappa: args.kappa,
@@ -156,6 +171,7 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         retry,
         resample_ess: args.resample_ess,
         scans: args.scans.unwrap_or(scans).min(scans),
+        unexplained,
     })
 }
 
