@@ -13,7 +13,9 @@ pub mod reference_backend;
 pub mod sonar_sim;
 pub mod sonar_uci;
 pub mod splitmix;
-pub mod wheel_odometry;
+/// The wheel odometry that is not the filter's motion model (moved to the tools, which feed it
+/// to `beamfield track --wheel-odometry`).
+pub use beamfield_tools::track::wheels as wheel_odometry;
 
 use std::path::PathBuf;
 

@@ -1,48 +1,8 @@
 //! The random data sets of the tests and benches, drawn from the library's own generator
 //! [`beamfield::mcl::SplitMix64`] (the pose pickers use [`beamfield::mcl::XorShift64`]
 //! directly), so that no second copy of either algorithm exists: [`Draws`] adds the f64 draws
-//! the host tests use to `SplitMix64`.
-//!
-//! The draws are host code (std's `ln`, `sqrt`, `cos`), exactly as the tests' data sets were
-//! generated before they moved onto the library's generator: the streams and the data sets are
-//! unchanged.
+//! the host tests use to `SplitMix64`. The trait lives in the tools
+//! ([`beamfield_tools::track::draws`]), whose wheel model draws from it too.
 
 pub use beamfield::mcl::SplitMix64;
-
-/// f64 draws from a [`SplitMix64`] stream (the host tests' data sets).
-pub trait Draws {
-    /// The next 64 random bits ([`SplitMix64::next_word`]).
-    fn next_u64(&mut self) -> u64;
-
-    /// Uniform in `[0, 1)`, 53 random bits.
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Uniform in `[lo, hi)`.
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-
-    /// Standard normal (Box–Muller, one of the pair, from `1 − U` so the logarithm's argument is
-    /// never 0).
-    fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform();
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
-
-    /// Standard normal (Box–Muller, one of the pair, from `max(U, 1e-300)`): the variant the
-    /// corridor and sonar simulators were written with, kept so their data sets do not change.
-    fn normal_clamped(&mut self) -> f64 {
-        let u1 = self.uniform().max(1e-300);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-}
-
-impl Draws for SplitMix64 {
-    fn next_u64(&mut self) -> u64 {
-        self.next_word()
-    }
-}
+pub use beamfield_tools::track::draws::Draws;

@@ -205,7 +205,7 @@ pub fn fit_log(
             "scans have {n} beams, more than {FIT_MAX_BEAMS}"
         )));
     }
-    let step = (std::f64::consts::PI / n as f64) as f32;
+    let step = crate::input::carmen::carmen_beam_step_rad(n) as f32;
     let layout = beamfield::BeamLayout::<FIT_MAX_BEAMS>::uniform(
         -core::f32::consts::FRAC_PI_2,
         step,

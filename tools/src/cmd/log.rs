@@ -138,7 +138,7 @@ impl fmt::Display for LogInfoReport {
             Some(n) => w!(
                 "scans: {} FLASER of {n} beams (beam i at −90° + i·{}°)",
                 s.scans,
-                180.0 / n as f64
+                crate::input::carmen::carmen_beam_step_rad(n).to_degrees()
             ),
             None => w!("scans: 0"),
         }

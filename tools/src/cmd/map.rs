@@ -20,7 +20,7 @@ pub enum MapCommand {
     /// Build a ROS map_server map (YAML + P5 PGM) from a CARMEN laser log with known poses.
     ///
     /// Every FLASER scan is projected from its logged (laser) pose, beam i at −90° + i·180°/n
-    /// counter-clockwise. End points are occupied evidence; the cells each beam crosses before
+    /// (180°/(n − 1) for an odd n: 181 or 361 beams span −90° … +90°) counter-clockwise. End points are occupied evidence; the cells each beam crosses before
     /// its end point are free evidence (exact grid traversal); max-range readings clear space
     /// only up to --max-range-free. Log-odds: +0.847 per hit, −0.405 per pass, clamped to
     /// [−2, 3.5]. Cells are written trinary with map_server's defaults: 0 occupied (p > 0.65),

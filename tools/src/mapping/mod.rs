@@ -4,7 +4,8 @@
 //!
 //! # The update, per scan
 //! For every beam, with the FLASER (laser) pose as the sensor origin and beam `i` at
-//! `−90° + i·180°/n`:
+//! `−90° + i·s` (`s` = [`crate::input::carmen::carmen_beam_step_rad`]: 180°/n, or
+//! 180°/(n − 1) for an odd n):
 //! - a reading `0 ≤ z < max_range` is a **hit**: the cell holding its end point gets occupied
 //!   evidence, and every cell the segment from the sensor to the end point crosses before it
 //!   (exact grid traversal, [`traverse`]) gets free evidence;

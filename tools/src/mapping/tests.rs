@@ -64,13 +64,13 @@ fn max_range_readings_clear_up_to_the_cap_only() {
 
 #[test]
 fn hits_are_occupied_and_the_ray_before_them_free() {
-    // n = 3: bearings −90°, −30°, +30°. A wall at x = 2.05 m: the ±30° beams read
-    // 2.0/cos 30° from (0.05, 0.05); the −90° beam has no return.
+    // n = 6: bearings −90°, −60°, −30°, 0°, +30°, +60°. A wall at x = 2.05 m: the ±30° beams
+    // read 2.0/cos 30° from (0.05, 0.05); the other beams have no return.
     let z = (2.0 / 30f64.to_radians().cos()) as f32;
     let pose = Pose::new(0.05, 0.05, 0.0);
-    let scans = vec![(pose, vec![NO_RETURN, z, z]); 5];
+    let scans = vec![(pose, vec![NO_RETURN, NO_RETURN, z, NO_RETURN, z, NO_RETURN]); 5];
     let (grid, stats) = build(&log_of(&scans), None);
-    assert_eq!((stats.hits, stats.max_range), (10, 5));
+    assert_eq!((stats.hits, stats.max_range), (10, 20));
     let dy = 2.0 * 30f64.to_radians().tan();
     assert_eq!(at(&grid, 2.05, 0.05 + dy), Cell::Occupied);
     assert_eq!(at(&grid, 2.05, 0.05 - dy), Cell::Occupied);

@@ -71,7 +71,7 @@ pub fn field_bytes(field: &Path) -> Result<Vec<u8>, TrackError> {
     Ok(bytes)
 }
 
-/// Loads the field and the log.
+/// Loads the field and the log (its max-range value detected).
 ///
 /// # Errors
 /// [`TrackError`] for unreadable or malformed inputs.
@@ -82,12 +82,28 @@ pub fn load(
     z_rand: f32,
     sigma_hit: f32,
 ) -> Result<TrackInput, TrackError> {
+    load_with_max_range(field, log, (z_hit, z_rand, sigma_hit), None)
+}
+
+/// [`load`] with the log's max-range value given (metres; `None`: detected).
+///
+/// # Errors
+/// [`TrackError`] for unreadable or malformed inputs.
+pub fn load_with_max_range(
+    field: &Path,
+    log: &Path,
+    (z_hit, z_rand, sigma_hit): (f32, f32, f32),
+    max_range_m: Option<f32>,
+) -> Result<TrackInput, TrackError> {
     let bytes = field_bytes(field)?;
-    let log = CarmenLog::read_path(log, ReadOptions::default()).map_err(TrackError::Log)?;
-    let max_range = log
-        .max_range
-        .value_m()
-        .ok_or_else(|| usage("the log's max-range value could not be detected"))?;
+    let options = ReadOptions {
+        max_range_m,
+        ..ReadOptions::default()
+    };
+    let log = CarmenLog::read_path(log, options).map_err(TrackError::Log)?;
+    let max_range = log.max_range.value_m().ok_or_else(|| {
+        usage("the log's max-range value could not be detected (give --max-range)")
+    })?;
     let params = LikelihoodParams::new(z_hit, z_rand, sigma_hit, max_range)
         .map_err(|e| usage(format!("likelihood field parameters: {e}")))?;
     let layout = log

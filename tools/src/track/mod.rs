@@ -12,7 +12,9 @@
 //! Random numbers, all [`SplitMix64`](beamfield::mcl::SplitMix64):
 //! - odometry: seed `S ^ ODOMETRY_SEED_XOR`;
 //! - the filter (initialization, motion samples, resampling, recovery): seed `S`;
-//! - the kidnapping's wrong pose: seed `S ^ KIDNAP_SEED_XOR`.
+//! - the kidnapping's wrong pose: seed `S ^ KIDNAP_SEED_XOR`;
+//! - with `--wheel-odometry`, the odometry comes from the wheel model ([`wheels`]: wrong radii
+//!   and wheelbase, slip; not the filter's model), its slip drawn from seed `S ^ WHEEL_SEED_XOR`.
 //!
 //! The FLASER pose is the laser's pose, so the filter estimates laser poses (centred mount).
 
@@ -28,6 +30,9 @@ pub const MAX_TRACK_PARTICLES: usize = 20_000;
 pub const MAX_TRACK_SEEDS: u64 = 1000;
 /// XOR applied to the seed for the odometry generator.
 pub const ODOMETRY_SEED_XOR: u64 = 0x6F64_6F6D_6574_7279;
+/// XOR applied to the seed for the wheel model's slip (`--wheel-odometry`; "wheel" in ASCII, the
+/// XOR the host tests' `intel_quality` study uses, so seed S gives the same odometry there).
+pub const WHEEL_SEED_XOR: u64 = 0x77_6865_656c;
 /// XOR applied to the seed for the kidnapping's wrong pose.
 pub const KIDNAP_SEED_XOR: u64 = 0x6B69_646E_6170_0000;
 /// Spread of the initial cloud around the first logged pose (`--init logged`): σ metres.
@@ -52,6 +57,46 @@ pub enum Init {
     Logged,
     /// Uniform over the free space appended to the field file (global localization).
     Global,
+}
+
+/// A wheel model preset for `--wheel-odometry` ([`wheels::WheelErrors`]): the real wheels of a
+/// differential-drive base relative to what its odometry believes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum WheelPreset {
+    /// Left radius +0.6 %, right −0.4 %, wheelbase +1.5 %, slip σ 1.5 % of each wheel's travel
+    /// per step.
+    Mild,
+    /// Twice mild: left radius +1.2 %, right −0.8 %, wheelbase +3 %, slip σ 3 % per step.
+    Strong,
+    /// `cargo xtask robot`'s: left radius +0.3 %, right −0.2 %, wheelbase +1 %, slip σ 1 % per
+    /// step, and one step in 500 in which one wheel loses 20 % of its travel.
+    Typical,
+}
+
+impl WheelPreset {
+    /// The wheel errors of the preset.
+    pub fn errors(self) -> wheels::WheelErrors {
+        match self {
+            Self::Mild => wheels::WheelErrors::MILD,
+            Self::Strong => wheels::WheelErrors::STRONG,
+            Self::Typical => wheels::WheelErrors::TYPICAL,
+        }
+    }
+
+    /// The preset's name on the command line and in reports (`mild`, `strong`, `typical`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mild => "mild",
+            Self::Strong => "strong",
+            Self::Typical => "typical",
+        }
+    }
+
+    /// The odometry of run seed `seed` along `logged`: [`wheels::wheel_odometry`] with the
+    /// preset's errors, its slip drawn from `seed ^ WHEEL_SEED_XOR`. One pose per logged pose.
+    pub fn odometry(self, logged: &[beamfield::Pose], seed: u64) -> Vec<beamfield::Pose> {
+        wheels::wheel_odometry(logged, &self.errors(), seed ^ WHEEL_SEED_XOR)
+    }
 }
 
 /// How particles are weighted.
@@ -108,12 +153,14 @@ pub fn usage(m: impl Into<String>) -> TrackError {
     TrackError::Usage(m.into())
 }
 
+pub mod draws;
 mod input;
 mod odometry;
 mod recorded;
 mod run;
+pub mod wheels;
 
-pub use input::{field_bytes, load, TrackInput};
+pub use input::{field_bytes, load, load_with_max_range, TrackInput};
 pub use odometry::{odometry_sample, synthesize_odometry};
 pub use recorded::{load_bag, read_odometry_file, BagSummary};
 pub use run::{run_once, Metrics, RunOptions, RunResult};

@@ -9,8 +9,9 @@ use crate::cmd::likelihood::LikelihoodArgs;
 use crate::cmd::scored_log::MAX_BEAMS;
 use crate::input::bag::Topics;
 use crate::track::{
-    field_bytes, load, load_bag, read_odometry_file, run_once, usage, Init, Metrics, RunOptions,
-    TrackError, Weighting, MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS,
+    field_bytes, load_bag, load_with_max_range, read_odometry_file, run_once, synthesize_odometry,
+    usage, Init, Metrics, RunOptions, TrackError, Weighting, WheelPreset, MAX_TRACK_PARTICLES,
+    MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
 };
 use clap::Args;
 use std::path::PathBuf;
@@ -48,6 +49,23 @@ pub struct TrackArgs {
     /// motion model.
     #[arg(long, value_name = "FILE", requires = "log")]
     pub odometry: Option<PathBuf>,
+    /// Odometry from a differential-drive wheel model instead of the filter's own noise model:
+    /// the logged steps driven by wheels whose radii and wheelbase are not what the odometry
+    /// believes, with slip (no Gaussian noise on the pose). Each seed S draws its slip from
+    /// S ^ 0x776865656c. --odom-noise is then only the filter's motion model.
+    #[arg(long, value_enum, value_name = "PRESET", requires = "log",
+          conflicts_with_all = ["odometry", "bag"])]
+    pub wheel_odometry: Option<WheelPreset>,
+    /// Synthesize the odometry with this noise ("A" or "A1,A2,A3,A4", as --odom-noise) instead
+    /// of --odom-noise, which is then only the filter's: odometry noisier (or quieter) than the
+    /// filter assumes. The same generator and seeds as without it.
+    #[arg(long, value_name = "ALPHAS", requires = "log",
+          conflicts_with_all = ["odometry", "bag", "wheel_odometry"])]
+    pub synthetic_odom_noise: Option<String>,
+    /// The log's max-range ("no return") value in metres; readings at or above it are no
+    /// return. Default: detected from the ranges (81.83 in the Intel log).
+    #[arg(long, value_name = "M", requires = "log")]
+    pub max_range: Option<f32>,
     /// Number of particles (1 to 20,000).
     #[arg(long, default_value_t = 500,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_TRACK_PARTICLES as u64))]
@@ -61,7 +79,8 @@ pub struct TrackArgs {
               .range(1..=MAX_BEAMS as u64))]
     pub stride: usize,
     /// Odometry noise odom_alpha1..4 (variance coefficients, AMCL's convention), used both to
-    /// synthesize the odometry and in the filter: "A" or "A1,A2,A3,A4".
+    /// synthesize the odometry and in the filter (only in the filter with --odometry, --bag or
+    /// --wheel-odometry): "A" or "A1,A2,A3,A4".
     #[arg(long = "odom-noise", default_value = "0.005")]
     pub odom_noise: String,
     /// Seed of the run (see the module docs for the generators).
@@ -198,11 +217,31 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         args.likelihood.z_rand,
         args.likelihood.sigma_hit,
     );
-    let (input, bag, odometry) = match (&args.log, &args.bag) {
+    let (mut input, bag, odometry) = match (&args.log, &args.bag) {
         (Some(log), None) => {
-            let mut input = load(&args.field, log, lk.0, lk.1, lk.2)?;
-            let source = match &args.odometry {
-                Some(path) => {
+            let mut input = load_with_max_range(&args.field, log, lk, args.max_range)?;
+            let source = match (&args.odometry, args.wheel_odometry) {
+                (Some(_), Some(_)) => {
+                    return Err(usage("give at most one of --odometry and --wheel-odometry"))
+                }
+                (None, Some(preset)) => {
+                    let e = preset.errors();
+                    format!(
+                        "wheel model {} (left radius {:+.1} %, right radius {:+.1} %, wheelbase \
+                         {:+.1} %, slip sigma {:.1} % per step{}; slip seed S ^ {WHEEL_SEED_XOR:#x})",
+                        preset.name(),
+                        (e.left_radius_scale - 1.0) * 100.0,
+                        (e.right_radius_scale - 1.0) * 100.0,
+                        (e.wheelbase_scale - 1.0) * 100.0,
+                        e.slip_sigma * 100.0,
+                        e.hard_slip.map_or(String::new(), |h| format!(
+                            ", hard slip p {} losing {:.0} %",
+                            h.p,
+                            h.loss * 100.0
+                        )),
+                    )
+                }
+                (Some(path), None) => {
                     // Poses for the scans the run uses.
                     let used = args
                         .scans
@@ -210,7 +249,16 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
                     input.odometry = Some(read_odometry_file(path, used)?);
                     format!("recorded ({})", path.display())
                 }
-                None => "synthesized from the logged poses with the motion model's noise".into(),
+                (None, None) => match &args.synthetic_odom_noise {
+                    Some(text) => format!(
+                        "synthesized from the logged poses with the motion model's noise at \
+                         odom_alpha {:?} (the filter's: --odom-noise)",
+                        parse_list(text, "--synthetic-odom-noise", 4)?
+                    ),
+                    None => {
+                        "synthesized from the logged poses with the motion model's noise".into()
+                    }
+                },
             };
             (input, None, source)
         }
@@ -250,6 +298,17 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
     // SEED, SEED+1, … wrapping past u64::MAX (the seed is only a generator's state).
     for seed in (0..args.seeds).map(|i| args.seed.wrapping_add(i)) {
         let o = options(args, seed, input.scans.len())?;
+        if let Some(preset) = args.wheel_odometry {
+            // This seed's wheels, for the scans the run uses.
+            let used = input.logged.get(..o.scans).unwrap_or(&input.logged);
+            input.odometry = Some(preset.odometry(used, seed));
+        } else if let Some(text) = &args.synthetic_odom_noise {
+            let a = parse_list(text, "--synthetic-odom-noise", 4)?;
+            let noise = beamfield::mcl::OdometryNoise::new(a[0], a[1], a[2], a[3])
+                .map_err(|e| usage(format!("--synthetic-odom-noise {text:?}: {e}")))?;
+            let used = input.logged.get(..o.scans).unwrap_or(&input.logged);
+            input.odometry = Some(synthesize_odometry(&noise, used, seed)?);
+        }
         let r = run_once(&input, &o)?;
         if runs.is_empty() {
             if let Some(path) = &args.output {
@@ -310,6 +369,11 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         options: o,
         output: args.output.as_ref().map(|p| p.display().to_string()),
         odometry,
+        odometry_model: match (&args.bag, &args.odometry, args.wheel_odometry) {
+            (Some(_), _, _) | (_, Some(_), _) => "recorded".into(),
+            (_, _, Some(p)) => format!("wheels-{}", p.name()),
+            _ => "synthetic".into(),
+        },
         bag,
     })
 }

@@ -72,6 +72,9 @@ pub struct TrackReport {
     pub output: Option<String>,
     /// Where the odometry came from.
     pub odometry: String,
+    /// Which odometry, in one word: `synthetic` (the filter's own noise model), `recorded` (a
+    /// file or a bag), `wheels-mild`, `wheels-strong`, `wheels-typical` (the wheel model).
+    pub odometry_model: String,
     /// What the bag gave, for a run on a bag.
     pub bag: Option<crate::track::BagSummary>,
 }

@@ -10,8 +10,10 @@
 //!   pose and `odom_x odom_y odom_theta` the robot's (CARMEN writes the laser pose first). In a
 //!   SLAM-corrected log such as the Intel lab log both hold the corrected pose. Angles are kept as
 //!   written (the Intel log has θ up to 3.247, not wrapped).
-//! - Beam `i` (0-based) is at bearing `−90° + i·180°/n`, counter-clockwise from the heading: a
-//!   scan is [`BeamLayout::uniform`]`(−π/2, π/n, n, max_range, mount)`.
+//! - Beam `i` (0-based) is at bearing `−90° + i·s`, counter-clockwise from the heading, with
+//!   `s` = [`carmen_beam_step_rad`]`(n)`: `180°/n` for an even `n` (180 beams: −90° … +89°),
+//!   `180°/(n − 1)` for an odd `n` (181 or 361 beams: −90° … +90°); a scan is
+//!   [`BeamLayout::uniform`]`(−π/2, s, n, max_range, mount)`.
 //! - **PARAM** lines are all kept ([`CarmenLog::params`]); `robot_frontlaser_offset` (metres,
 //!   forward) is parsed into [`CarmenLog::frontlaser_offset_m`].
 //! - Every other message type (ODOM, NEFF, RLASER, …) is skipped and counted per type
@@ -38,7 +40,7 @@ pub use detect::{
     detect_max_range, Detection, DETECT_DOMINANCE, DETECT_MIN_REPEATS, DETECT_TOP_QUANTILE,
 };
 pub use error::{Field, LineError, LineErrorKind, LogError};
-pub use scan::{carmen_bearing_rad, LaserScan, PoseF64};
+pub use scan::{carmen_beam_step_rad, carmen_bearing_rad, LaserScan, PoseF64};
 pub(crate) use stats::Extent;
 pub use stats::{decimal_f64, serialize_f32, Bounds, LogStats};
 
@@ -352,7 +354,7 @@ impl CarmenLog {
     }
 
     /// The sensor layout for scoring at the FLASER (laser) pose [`LaserScan::pose`]:
-    /// `uniform(−π/2, π/n, n, max_range, CENTERED)`.
+    /// `uniform(−π/2, s, n, max_range, CENTERED)`, `s` = [`carmen_beam_step_rad`]`(n)`.
     ///
     /// To score at the robot pose [`LaserScan::odom_pose`] instead, build the layout with
     /// [`CarmenLog::robot_mount`].
@@ -374,7 +376,7 @@ impl CarmenLog {
     ) -> Result<BeamLayout<N>, ScanError> {
         let n = self.beams().ok_or(ScanError::Empty)?;
         let max_range_m = self.max_range.value_m().ok_or(ScanError::BadMaxRange)?;
-        let step = (std::f64::consts::PI / n as f64) as f32;
+        let step = carmen_beam_step_rad(n) as f32;
         BeamLayout::uniform(-core::f32::consts::FRAC_PI_2, step, n, max_range_m, mount)
     }
 

@@ -6,7 +6,7 @@ use beamfield::{Pose, Scan, ScanError};
 /// One FLASER message.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LaserScan {
-    /// The ranges as written, metres, in beam order (beam `i` at `−90° + i·180°/n`). Max-range
+    /// The ranges as written, metres, in beam order (beam `i` at [`carmen_bearing_rad`]). Max-range
     /// readings keep their sentinel value; [`beamfield::Reading::classify`] against the log's
     /// max range tells them apart.
     pub ranges_m: Vec<f32>,
@@ -36,7 +36,7 @@ impl LaserScan {
 
     /// World-frame end point of beam `i` (metres), in f64 from the f64 pose
     /// ([`LaserScan::pose_f64`]), or `None` past the last beam. Uses the CARMEN bearing
-    /// `−π/2 + i·π/n`; max-range readings are projected like any other.
+    /// [`carmen_bearing_rad`]; max-range readings are projected like any other.
     pub fn endpoint(&self, i: usize) -> Option<(f64, f64)> {
         let n = self.ranges_m.len();
         let r = f64::from(*self.ranges_m.get(i)?);
@@ -67,7 +67,20 @@ impl From<Pose> for PoseF64 {
     }
 }
 
-/// Bearing of beam `i` of `n` in a FLASER scan, radians: `−π/2 + i·π/n`, in f64.
+/// Angle between consecutive beams of a FLASER scan of `n` beams, radians, in f64: a scan starts
+/// at −90° and covers 180° in `n` intervals when `n` is even (`π/n`: the Intel and Edmonton
+/// logs' 180 beams at −90° … +89°, 1° apart) and in `n − 1` when `n` is odd (`π/(n − 1)`: both
+/// ends included, the Acapulco log's 181 beams 1° apart and the Belgioioso log's 361 beams 0.5°
+/// apart, −90° … +90°). The logs do not say which; the layouts were established from the data,
+/// each the one whose end points at the corrected poses fall into the fewest map cells (the
+/// crispest map; data/README.md).
+pub fn carmen_beam_step_rad(n: usize) -> f64 {
+    let intervals = if n % 2 == 1 && n > 1 { n - 1 } else { n.max(1) };
+    std::f64::consts::PI / intervals as f64
+}
+
+/// Bearing of beam `i` of `n` in a FLASER scan, radians: `−π/2 + i·`[`carmen_beam_step_rad`]`(n)`,
+/// in f64.
 pub fn carmen_bearing_rad(i: usize, n: usize) -> f64 {
-    -std::f64::consts::FRAC_PI_2 + i as f64 * std::f64::consts::PI / n.max(1) as f64
+    -std::f64::consts::FRAC_PI_2 + i as f64 * carmen_beam_step_rad(n)
 }

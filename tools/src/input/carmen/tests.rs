@@ -46,7 +46,9 @@ fn parses_a_small_log() {
     let layout = log.layout::<4>().unwrap();
     assert_eq!(layout.len(), 3);
     assert!((layout.beams()[0].bearing_rad + core::f32::consts::FRAC_PI_2).abs() < 1e-7);
-    assert!((layout.beams()[2].bearing_rad - core::f32::consts::PI / 6.0).abs() < 1e-6);
+    // An odd beam count spans 180° in n − 1 intervals: −90°, 0°, +90°.
+    assert!(layout.beams()[1].bearing_rad.abs() < 1e-6);
+    assert!((layout.beams()[2].bearing_rad - core::f32::consts::FRAC_PI_2).abs() < 1e-6);
     assert_eq!(log.robot_mount().x_m, 0.25);
     assert!(s.to_scan::<2>().is_err());
     assert_eq!(s.to_scan::<3>().unwrap().ranges_m(), &[9.0, 0.5, 9.0]);

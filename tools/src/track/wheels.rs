@@ -4,6 +4,9 @@
 //! Gaussian noise on the odometry pose, so the errors are systematic (a drift in heading on
 //! straight lines, a scale error in every turn) plus the slip.
 //!
+//! It lives in the tools so that `beamfield track --wheel-odometry` can feed it to the filter;
+//! the host tests and `cargo xtask robot` use it as `host_tests::wheel_odometry`.
+//!
 //! Two views of the same wheels:
 //! - [`Encoders`]: the counters of the wheels' encoders, what a base controller reads (`cargo
 //!   xtask robot` sends them to the device, which turns ticks back into travel with the
@@ -15,7 +18,8 @@
 //! its heading change. A sideways component, which a differential drive cannot drive, is lost,
 //! as on a real base.
 
-use crate::splitmix::{Draws, SplitMix64};
+use super::draws::Draws;
+use beamfield::mcl::SplitMix64;
 use beamfield::Pose;
 use std::f64::consts::{PI, TAU};
 
