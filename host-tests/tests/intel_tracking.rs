@@ -55,6 +55,7 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         resample_ess: 0.5,
         scans,
         unexplained: None,
+        resetting: false,
     }
 }
 

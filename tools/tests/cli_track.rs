@@ -75,6 +75,19 @@ fn global_init_needs_the_free_space_section() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--free-space"), "{err}");
+    // Recovery would inject nothing without the free space: refused, not silently off.
+    let out = run(&["--recovery", "0.001,0.1"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--recovery") && err.contains("--free-space"),
+        "{err}"
+    );
+    // A guard on recovery that is off cannot take effect.
+    let out = run(&["--recovery-while-unsettled"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--recovery-while-unsettled"), "{err}");
     // Tracking from the logged pose needs no free space.
     let out = run(&["--json"]);
     assert!(

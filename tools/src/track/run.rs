@@ -3,7 +3,8 @@
 use crate::cmd::scored_log::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::mcl::{
-    Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64, Unexplained,
+    Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, Resetting, SplitMix64,
+    Unexplained,
 };
 use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, Tempered};
 use std::io::IsTerminal;
@@ -47,6 +48,9 @@ pub struct RunOptions {
     /// Beams the map cannot explain left out of each update (distance in metres, largest
     /// share); None: off (`MclConfig::with_unexplained`, product weighting only).
     pub unexplained: Option<(f32, f32)>,
+    /// Expansion and free-space resetting and the settle guard driven by the quality signal
+    /// (`MclConfig::with_resetting(Some(Resetting::DEFAULT))`); needs the free space.
+    pub resetting: bool,
 }
 
 /// The outcome of one run.
@@ -183,6 +187,23 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             "--init global and --kidnap need a field built with --free-space",
         ));
     }
+    let recovery_on = o.recovery.0 > 0.0 || o.recovery.1 > 0.0;
+    if recovery_on && free.is_none() {
+        // Recovery draws its random particles from the free space: without it, none.
+        return Err(usage(
+            "--recovery injects particles drawn from the free space: it needs a field built with --free-space",
+        ));
+    }
+    if o.resetting && free.is_none() {
+        return Err(usage(
+            "--resetting renews the cloud from the free space when lost: it needs a field built with --free-space",
+        ));
+    }
+    if o.recovery_while_unsettled && !recovery_on {
+        return Err(usage(
+            "--recovery-while-unsettled only limits --recovery, which is off",
+        ));
+    }
     let noise = OdometryNoise::new(o.alphas[0], o.alphas[1], o.alphas[2], o.alphas[3])
         .map_err(|e| usage(format!("--odom-noise: {e}")))?;
     let config = MclConfig::new(noise, o.resample_ess, o.recovery.0, o.recovery.1)
@@ -198,7 +219,9 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             distance_m,
             max_share,
         }))
-        .map_err(|e| usage(format!("--unexplained: {e}")))?;
+        .map_err(|e| usage(format!("--unexplained: {e}")))?
+        .with_resetting(o.resetting.then_some(Resetting::DEFAULT))
+        .map_err(|e| usage(format!("--resetting: {e}")))?;
     let lf = LikelihoodField::new(view, input.params);
     let model = Tempered::new(lf, o.kappa, o.stride)
         .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;

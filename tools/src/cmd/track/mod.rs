@@ -124,6 +124,14 @@ pub struct TrackArgs {
     /// be. E.g. "--unexplained 0.25,0.5".
     #[arg(long)]
     pub unexplained: Option<String>,
+    /// Recovery in fixed memory driven by the quality signal (off by default;
+    /// MclConfig::with_resetting with Resetting::DEFAULT, docs/localization.md): when a scan's
+    /// explained share is below 0.4 the cloud is widened in place (σ 0.1 m / 0.05 rad, doubling
+    /// up to 8×); after 2 updates reported Lost the set is renewed from the best of 100 scored
+    /// free-space candidates per particle; no augmented-MCL injection while tracking for 20
+    /// updates. Needs a field built with --free-space.
+    #[arg(long)]
+    pub resetting: bool,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -191,6 +199,7 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         resample_ess: args.resample_ess,
         scans: args.scans.unwrap_or(scans).min(scans),
         unexplained,
+        resetting: args.resetting,
     })
 }
 
@@ -351,6 +360,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         weighting: format!("{:?}", o.weighting),
         recovery: [o.recovery.0, o.recovery.1],
         recovery_while_unsettled: o.recovery_while_unsettled,
+        resetting: o.resetting,
         retry: o.retry.map(|(d, k)| [d, k]),
         kidnap: o.kidnap,
         runs: per,

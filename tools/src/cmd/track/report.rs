@@ -42,6 +42,8 @@ pub struct TrackReport {
     pub recovery: [f32; 2],
     /// Recovery only while unsettled.
     pub recovery_while_unsettled: bool,
+    /// Resetting driven by the quality signal (`--resetting`).
+    pub resetting: bool,
     /// The retry (drop, scale).
     pub retry: Option<[f32; 2]>,
     /// The kidnapping's scan.
@@ -117,6 +119,12 @@ impl fmt::Display for TrackReport {
                 .map(|k| format!(", kidnapped at scan {k}"))
                 .unwrap_or_default()
         )?;
+        if o.resetting {
+            writeln!(
+                f,
+                "resetting: on (expansion, best-of-candidates free-space reset, settle guard)"
+            )?;
+        }
         writeln!(f, "odometry: {}", self.odometry)?;
         if let Some(b) = &self.bag {
             writeln!(
