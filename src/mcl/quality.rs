@@ -28,7 +28,7 @@
 //!   or `spread_rad` [0.15 rad], or the concentration is below `concentration` [0.5];
 //! - `Tracking` otherwise;
 //!
-//! and a `Lost` only after `lost_after` (2) updates in a row that meet one of its conditions
+//! and a `Lost` only after `lost_after` (3) updates in a row that meet one of its conditions
 //! (`Uncertain` until then).
 //!
 //! Without it (updates by a model or a closure), the drop stands in for `e`: `Lost` above
@@ -118,7 +118,7 @@ impl QualityThresholds {
         lost_explained_dropping: 0.5,
         dropping_nats: 0.25,
         lost_explained_fall: 0.4,
-        lost_after: 2,
+        lost_after: 3,
         spread_m: 0.25,
         spread_rad: 0.15,
         concentration: 0.5,
