@@ -35,7 +35,7 @@ enum Command {
     /// Monte Carlo localization over a whole CARMEN log against its logged poses (odometry
     /// synthesized from them with the motion model's noise): tracking error, global
     /// localization, kidnapping; a PNG of the tracks over the map.
-    Track(beamfield_tools::cmd::track::TrackArgs),
+    Track(Box<beamfield_tools::cmd::track::TrackArgs>),
     /// Fit the beam model's intrinsics (EM) to a CARMEN log, z* ray cast through a blob.
     Fit(beamfield_tools::cmd::fit::FitArgs),
     /// Ultrasonic ring tools (firing schedules and crosstalk).
