@@ -221,15 +221,10 @@ impl Moments {
 
 /// The variances on the diagonal of a 3×3 covariance (x, y, heading: m², m², rad²), each
 /// clamped at 0 (a rounding-negative variance reads 0).
+#[inline]
 pub fn diagonal_variances(covariance: &[[f32; 3]; 3]) -> [f32; 3] {
-    [0, 1, 2].map(|i| {
-        covariance
-            .get(i)
-            .and_then(|r| r.get(i))
-            .copied()
-            .unwrap_or(0.0)
-            .max(0.0)
-    })
+    let [[xx, _, _], [_, yy, _], [_, _, tt]] = *covariance;
+    [xx.max(0.0), yy.max(0.0), tt.max(0.0)]
 }
 
 #[cfg(test)]

@@ -891,7 +891,9 @@ mod tests {
     fn eighteen_bytes_per_particle() {
         assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
         let fixed = core::mem::size_of::<Mcl<'_, 1000>>();
-        assert!(fixed <= 272, "{fixed}");
+        // 280 on a 64-bit host: the quality signal's averages (the slow average of the
+        // explained share included) and the recovery's counters; nothing per particle.
+        assert!(fixed <= 280, "{fixed}");
         println!("Mcl: {fixed} bytes besides the particles");
     }
 
