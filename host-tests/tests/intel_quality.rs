@@ -16,18 +16,16 @@
 //!   at least 3 m away; detection = updates from the kidnap until the first `Lost`; recovery =
 //!   updates from the kidnap until the estimate stays within 0.2 m / 5° for 10 scans.
 
-use beamfield::field::{FreeSpace, LikelihoodField, LikelihoodParams};
+use beamfield::field::{FreeSpace, LikelihoodField};
 use beamfield::mcl::{
     Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, Quality, QualityThresholds,
     Resetting, SplitMix64,
 };
-use beamfield::{wrap_angle, Pose, Scan, SensorMount, Tempered};
-use beamfield_tools::blob::{build_blob, build_free_space};
+use beamfield::{wrap_angle, Pose, Scan, Tempered};
 use beamfield_tools::cmd::scored_log::MAX_BEAMS;
 use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::input::map::OccupancyMap;
-use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 use beamfield_tools::track::TrackInput;
+use host_tests::intel_input;
 use host_tests::wheel_odometry::{wheel_odometry, WheelErrors};
 
 /// A run is lost when the estimate is this far off (metres) …
@@ -47,24 +45,6 @@ const RECOVERED_SCANS: usize = 10;
 /// The first scan of the holdout third.
 const HOLDOUT_FROM: usize = 607;
 const PARTICLES: usize = 500;
-
-fn intel_input() -> TrackInput {
-    let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
-    let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
-    let max_range = log.max_range.value_m().unwrap();
-    let (grid, _) = build_from_log(&log, &MappingOptions::new(max_range), |_, _| {}).unwrap();
-    let map = OccupancyMap::from_grid(&grid.to_occupancy(OCCUPIED_THRESH, FREE_THRESH));
-    let mut bytes = build_blob(&map, 2.0).unwrap();
-    bytes.extend(build_free_space(&map).unwrap());
-    TrackInput {
-        bytes,
-        params: LikelihoodParams::new(0.95, 0.05, 0.05, max_range).unwrap(),
-        layout: log.layout_with_mount(SensorMount::CENTERED).unwrap(),
-        scans: log.scans.iter().map(|s| s.ranges_m.clone()).collect(),
-        logged: log.scans.iter().map(|s| s.pose).collect::<Vec<Pose>>(),
-        odometry: None,
-    }
-}
 
 /// One run's trace.
 #[derive(Default)]

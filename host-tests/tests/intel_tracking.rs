@@ -13,31 +13,8 @@
 //! (a biased cell convention costs about 2.5 cm in x and y; a broken resampler or motion model
 //! loses the robot) does.
 
-use beamfield::field::LikelihoodParams;
-use beamfield::{Pose, SensorMount};
-use beamfield_tools::blob::{build_blob, build_free_space};
-use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::input::map::OccupancyMap;
-use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
-use beamfield_tools::track::{run_once, Init, RunOptions, TrackInput, Weighting};
-
-fn intel_input() -> TrackInput {
-    let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
-    let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
-    let max_range = log.max_range.value_m().unwrap();
-    let (grid, _) = build_from_log(&log, &MappingOptions::new(max_range), |_, _| {}).unwrap();
-    let map = OccupancyMap::from_grid(&grid.to_occupancy(OCCUPIED_THRESH, FREE_THRESH));
-    let mut bytes = build_blob(&map, 2.0).unwrap();
-    bytes.extend(build_free_space(&map).unwrap());
-    TrackInput {
-        bytes,
-        params: LikelihoodParams::new(0.95, 0.05, 0.05, max_range).unwrap(),
-        layout: log.layout_with_mount(SensorMount::CENTERED).unwrap(),
-        scans: log.scans.iter().map(|s| s.ranges_m.clone()).collect(),
-        logged: log.scans.iter().map(|s| s.pose).collect::<Vec<Pose>>(),
-        odometry: None,
-    }
-}
+use beamfield_tools::track::{run_once, Init, RunOptions, Weighting};
+use host_tests::intel_input;
 
 fn tracking_options(seed: u64, scans: usize) -> RunOptions {
     RunOptions {

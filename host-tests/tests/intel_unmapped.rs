@@ -12,17 +12,14 @@
 //!   of the log; the property asserted is that with the option the estimate stays close while
 //!   without it the same run is dragged farther.
 
-use beamfield::field::{FieldView, LikelihoodField, LikelihoodParams};
+use beamfield::field::{FieldView, LikelihoodField};
 use beamfield::mcl::{
     Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, SplitMix64, Unexplained,
 };
-use beamfield::{wrap_angle, Pose, Scan, SensorMount, Tempered};
-use beamfield_tools::blob::{build_blob, build_free_space};
+use beamfield::{wrap_angle, Pose, Scan, Tempered};
 use beamfield_tools::cmd::scored_log::MAX_BEAMS;
-use beamfield_tools::input::carmen::{CarmenLog, ReadOptions};
-use beamfield_tools::input::map::OccupancyMap;
-use beamfield_tools::mapping::{build_from_log, MappingOptions, FREE_THRESH, OCCUPIED_THRESH};
 use beamfield_tools::track::TrackInput;
+use host_tests::intel_input;
 use host_tests::splitmix::Draws;
 use host_tests::wheel_odometry::{wheel_odometry, WheelErrors};
 
@@ -33,24 +30,6 @@ const LOST_DEG: f64 = 30.0;
 /// … for this many scans in a row (the definition of `intel_quality`).
 const LOST_SCANS: usize = 10;
 const PARTICLES: usize = 500;
-
-fn intel_input() -> TrackInput {
-    let path = host_tests::data_dir().join("laser_intel_lab/intel-corrected.log");
-    let log = CarmenLog::read_path(&path, ReadOptions::default()).unwrap();
-    let max_range = log.max_range.value_m().unwrap();
-    let (grid, _) = build_from_log(&log, &MappingOptions::new(max_range), |_, _| {}).unwrap();
-    let map = OccupancyMap::from_grid(&grid.to_occupancy(OCCUPIED_THRESH, FREE_THRESH));
-    let mut bytes = build_blob(&map, 2.0).unwrap();
-    bytes.extend(build_free_space(&map).unwrap());
-    TrackInput {
-        bytes,
-        params: LikelihoodParams::new(0.95, 0.05, 0.05, max_range).unwrap(),
-        layout: log.layout_with_mount(SensorMount::CENTERED).unwrap(),
-        scans: log.scans.iter().map(|s| s.ranges_m.clone()).collect(),
-        logged: log.scans.iter().map(|s| s.pose).collect::<Vec<Pose>>(),
-        odometry: None,
-    }
-}
 
 /// An obstacle that is not in the map (world frame, metres).
 #[derive(Clone, Copy, Debug)]

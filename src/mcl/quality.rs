@@ -451,7 +451,10 @@ mod tests {
             *s = q.observe(&t, -110.0, None, &TIGHT, 1.0).state;
         }
         // Lost from the third update that meets the condition (`lost_after` 3).
-        assert_eq!(states, [Quality::Uncertain, Quality::Uncertain, Quality::Lost]);
+        assert_eq!(
+            states,
+            [Quality::Uncertain, Quality::Uncertain, Quality::Lost]
+        );
         let r = q.observe(&t, f32::NAN, None, &TIGHT, 1.0);
         assert!(r.score.is_finite() && (0.0..=1.0).contains(&r.score));
     }
