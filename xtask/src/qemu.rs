@@ -52,36 +52,53 @@ impl Board {
     }
 }
 
-/// Fails unless `qemu-system-arm` runs, saying how to install it.
+/// The QEMU every task runs: `qemu-system-arm` from `PATH`, or the program named by the
+/// environment variable `BEAMFIELD_QEMU` (to run the same task on another QEMU version, e.g.
+/// one unpacked beside the system's).
+pub fn qemu_program() -> std::ffi::OsString {
+    std::env::var_os("BEAMFIELD_QEMU").unwrap_or_else(|| "qemu-system-arm".into())
+}
+
+/// Fails unless QEMU (see [`qemu_program`]) runs, saying how to install it; prints which QEMU
+/// version the task runs on (instruction counts do not depend on it; timing does).
 pub fn ensure_qemu() -> Result {
-    if crate::process::answers(Path::new("qemu-system-arm")) {
-        Ok(())
-    } else {
-        Err(Error::Missing(
-            "qemu-system-arm not found. Install it:\n  \
-             Debian/Ubuntu: sudo apt-get install -y --no-install-recommends qemu-system-arm\n  \
-             Fedora: sudo dnf install qemu-system-arm    macOS: brew install qemu"
-                .to_string(),
-        ))
+    let program = qemu_program();
+    let version = Command::new(&program).arg("--version").output();
+    match version {
+        Ok(out) if out.status.success() => {
+            let text = String::from_utf8_lossy(&out.stdout);
+            eprintln!(
+                "xtask: {}",
+                text.lines().next().unwrap_or("QEMU (no version printed)")
+            );
+            Ok(())
+        }
+        _ => Err(Error::Missing(format!(
+            "{} not found or does not run. Install it:\n  \
+             Debian 12 whose QEMU tools come from bookworm-backports (`qemu-img --version` says 10.x): \
+             add the bookworm-backports suite to apt's sources, then \
+             sudo apt-get install -y --no-install-recommends -t bookworm-backports qemu-system-arm\n  \
+             other Debian/Ubuntu: sudo apt-get install -y --no-install-recommends qemu-system-arm\n  \
+             Fedora: sudo dnf install qemu-system-arm    macOS: brew install qemu\n  \
+             (QEMU 7.2 to 10.x work; BEAMFIELD_QEMU names another qemu-system-arm)",
+            program.to_string_lossy()
+        ))),
     }
 }
 
-/// `timeout 120 qemu-system-arm -machine MACHINE` with semihosting and `-icount shift=0`
+/// `timeout 120 QEMU -machine MACHINE` with semihosting and `-icount shift=0`
 /// (one instruction is one nanosecond of virtual time), without the kernel.
 fn qemu_command(machine: &str) -> Command {
     let mut cmd = Command::new("timeout");
-    cmd.args([
-        &QEMU_TIMEOUT_S.to_string(),
-        "qemu-system-arm",
-        "-machine",
-        machine,
-    ])
-    .args([
-        "-nographic",
-        "-semihosting-config",
-        "enable=on,target=native",
-    ])
-    .args(["-icount", "shift=0"]);
+    cmd.arg(QEMU_TIMEOUT_S.to_string())
+        .arg(qemu_program())
+        .args(["-machine", machine])
+        .args([
+            "-nographic",
+            "-semihosting-config",
+            "enable=on,target=native",
+        ])
+        .args(["-icount", "shift=0"]);
     cmd
 }
 
@@ -319,9 +336,7 @@ pub fn run_robot(
     // recomputes it), the counting plugin's counts do not depend on timing, and QEMU delivers
     // the serial bytes about twice as fast with the guest's clock on the host's.
     let mut cmd = Command::new("timeout");
-    cmd.args([
-        &timeout_s.to_string(),
-        "qemu-system-arm",
+    cmd.arg(timeout_s.to_string()).arg(qemu_program()).args([
         "-machine",
         "netduinoplus2",
         "-nographic",
