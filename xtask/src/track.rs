@@ -147,6 +147,7 @@ pub fn check(out: &str) -> Result<Vec<String>> {
 /// Runs the track firmware under QEMU on `board`, prints its report, and checks it against the
 /// host's recomputation.
 pub fn track(board: Board) -> Result {
+    crate::qemu::ensure_qemu()?;
     let machine = board.machine();
     let Finished {
         code,
@@ -195,6 +196,7 @@ fn per_particle(counted: &Regions) -> Result<(f64, f64, f64)> {
 /// the host as [`track`] does, and prints the instructions per particle per update (scoring
 /// included and excluded) and the program's RAM (`.data`, `.bss`, `.uninit` by `llvm-size`).
 pub fn track_insns(board: Board) -> Result {
+    crate::qemu::ensure_qemu()?;
     let elf = build_program(board, "track", &[])?;
     let run = run_counted(&elf, board.machine(), "track-insns")?;
     if run.code != 0 {

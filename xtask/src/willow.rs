@@ -15,6 +15,7 @@ const FLASH_BYTES: u64 = 1 << 20;
 
 /// Builds and runs the program, then checks its scores against the host's.
 pub fn willow() -> Result {
+    crate::qemu::ensure_qemu()?;
     let board = Board::Netduinoplus2;
     let blob_path = repo_root().join("firmware/assets/willow-tiled.bin");
     let blob = std::fs::read(&blob_path).map_err(|e| Error::io(&blob_path, e))?;
