@@ -1,5 +1,6 @@
 //! `cargo xtask robot`: the host plays the robot around the firmware `robot`
-//! (`firmware/src/bin/robot.rs`) on QEMU's `netduinoplus2`.
+//! (`firmware/src/bin/robot.rs`) on QEMU's `netduinoplus2` (STM32F405) or `b-l475e-iot01a`
+//! (STM32L475, `--board`).
 //!
 //! 1. The Intel lab log becomes what a robot sends ([`streams`]): every scan as an LD06
 //!    revolution at 10 Hz into USART1, and into USART2 the wheel encoders at 50 Hz of a
@@ -70,6 +71,8 @@ pub struct Options {
     pub bridge: bool,
     /// A bag's scans, odometry and reference instead of the Intel log and simulated wheels.
     pub bag: Option<BagInput>,
+    /// The board (QEMU machine, memory layout, the firmware's board module).
+    pub board: Board,
 }
 
 /// Frames sent by the application, in order.
@@ -315,7 +318,7 @@ pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result 
     let mut bridged_from_us = None;
     if let (true, Some(listener)) = (opts.bridge, listener) {
         // Built before the bridge is waited for: then the run starts as soon as it connects.
-        build_program(Board::Netduinoplus2, BIN, &features(&opts))?;
+        build_program(opts.board, BIN, &features(&opts))?;
         let conn = bridge::accept(listener)?;
         let (d, written) = run_device(&opts, &s, Some(conn))?;
         println!(
@@ -441,6 +444,7 @@ pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result 
 /// The firmware's features for `opts`.
 fn features(opts: &Options) -> Vec<&'static str> {
     let mut features = vec!["emulator"];
+    features.extend(opts.board.robot_feature());
     if opts.count {
         features.push("count");
     }
@@ -456,13 +460,13 @@ fn run_device(
     bridge: Option<std::net::TcpStream>,
 ) -> Result<(Vec<Message>, bridge::Written)> {
     ensure_qemu()?;
-    let elf = build_program(Board::Netduinoplus2, BIN, &features(opts))?;
+    let elf = build_program(opts.board, BIN, &features(opts))?;
     let extra = if opts.count || opts.isr {
         qemu_args(&elf, ", or run `cargo xtask robot` without --count")?
     } else {
         Vec::new()
     };
-    let run = run_robot(&elf, READY, &s.lidar, &s.link, &extra, TIMEOUT_S, bridge)?;
+    let run = run_robot(opts.board, &elf, READY, &s.lidar, &s.link, &extra, TIMEOUT_S, bridge)?;
     let out = &run.finished;
     for l in out.stdout.lines().filter(|l| l.starts_with("robot: ")) {
         println!("device {l}");
@@ -472,7 +476,7 @@ fn run_device(
         return Err(crate::qemu::failure(
             out.code,
             "`robot`",
-            "netduinoplus2",
+            opts.board.machine(),
             "see its output",
         ));
     }
@@ -487,7 +491,7 @@ fn run_device(
         run.elapsed.as_secs_f64()
     );
     if opts.count {
-        budget(&Regions::read(&out.stdout, &out.stderr)?, s)?;
+        budget(&Regions::read(&out.stdout, &out.stderr)?, s, opts.board)?;
     }
     if opts.isr {
         isr(&out.stderr, s)?;
@@ -555,13 +559,14 @@ fn same_frames(host: &[Message], device: &[Message]) -> Result<usize> {
     Ok(extra.len())
 }
 
-/// Instructions per revolution by stage against 100 ms at 168 MHz.
-fn budget(r: &Regions, s: &Streams) -> Result {
+/// Instructions per revolution by stage against 100 ms at the board's core clock.
+fn budget(r: &Regions, s: &Streams, board: Board) -> Result {
     r.expect(&regions::ALL)?;
     let revs = s.revolutions as f64;
-    let core_hz = Board::Netduinoplus2.core_hz() as f64;
+    let core_hz = board.core_hz() as f64;
+    let mhz = core_hz / 1e6;
     let budget = core_hz * 0.1;
-    println!("time budget (QEMU plugin, exact counts; 168 MHz at 1 cycle per instruction, so 16.8 M instructions per 100 ms revolution):");
+    println!("time budget (QEMU plugin, exact counts; {mhz:.0} MHz at 1 cycle per instruction, so {:.1} M instructions per 100 ms revolution):", budget / 1e6);
     let mut total = 0.0;
     let rows = [
         (regions::LIDAR, s.lidar.len() as f64, "byte"),
@@ -586,7 +591,7 @@ fn budget(r: &Regions, s: &Streams) -> Result {
         );
     }
     println!(
-        "  total {:.0} instructions per revolution on average = {:.2} ms at 168 MHz ({:.1} % of 100 ms)",
+        "  total {:.0} instructions per revolution on average = {:.2} ms at {mhz:.0} MHz ({:.1} % of 100 ms)",
         total,
         total / core_hz * 1e3,
         total / budget * 100.0
