@@ -7,7 +7,7 @@
 //! STM32L475 (QEMU `b-l475e-iot01a`) with the feature `board-b-l475e-iot01a`. On both the Nth
 //! `-serial` is USART N.
 //!
-//! The map (the Intel lab's 5 cm distance field and its free space) is linked into flash; the
+//! The map (the Intel lab's 5 cm distance field, tiled, and its free space) is linked into flash; the
 //! setup is `fixtures/src/robot_plan.rs`, which the host's replay uses too. The last good
 //! estimate is kept in RAM that a reset does not clear ([`SeedStore`]; a flash page on a
 //! product) and seeds the next start.
@@ -45,7 +45,12 @@ use panic_probe as _;
 #[cfg(not(feature = "defmt"))]
 use panic_semihosting as _;
 
-/// The 5 cm distance field of the Intel map (the demo's, `docs/demo.md`).
+/// The 5 cm distance field of the Intel map (the demo's, `docs/demo.md`), tiled with the
+/// feature `tiled` (297,640 bytes, the same distances bit for bit; `docs/blob-format.md`), else
+/// raw (781,063 bytes). `cargo xtask robot` builds it tiled.
+#[cfg(feature = "tiled")]
+static BLOB: &[u8] = include_bytes!("../../assets/intel-tiled.bin");
+#[cfg(not(feature = "tiled"))]
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
 /// Its known-free cells, for global localization (`docs/free-space-format.md`).
 static FREE: &[u8] = include_bytes!("../../assets/intel-free-space.bin");
