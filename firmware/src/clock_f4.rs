@@ -57,7 +57,7 @@ fn wait(mut ready: impl FnMut() -> bool) -> bool {
 ///
 /// # Errors
 /// [`ClockError::NoPllFactors`] when no PLL factors give these frequencies from the input (then
-/// nothing was changed); [`ClockError::BadRegister`] / [`ClockError::TooFast`] when the registers
+/// only the HSE was switched on); [`ClockError::BadRegister`] / [`ClockError::TooFast`] when the registers
 /// read back decode to no valid clock tree.
 pub fn set_up(
     rcc: &RCC,
@@ -81,7 +81,11 @@ pub fn set_up(
     }
     let input = if hse_ready { hse_hz } else { f4::HSI_HZ };
     let pll = f4::Pll::for_outputs(input, sysclk_hz, usb_hz)?;
-    // The PLL can be configured only while it is off.
+    // The PLL can be configured only while it is off, and it cannot be switched off while it
+    // is SYSCLK (as a bootloader may have left it): SYSCLK goes to the HSI first.
+    #[allow(unsafe_code)]
+    rcc.cfgr().modify(|r, w| unsafe { w.bits(r.bits() & !0x3) });
+    wait(|| (rcc.cfgr().read().bits() >> 2) & 0x3 == 0b00);
     #[allow(unsafe_code)]
     rcc.cr()
         .modify(|r, w| unsafe { w.bits(r.bits() & !CR_PLLON) });

@@ -88,7 +88,7 @@ pub struct ClockReport {
 /// range).
 ///
 /// # Errors
-/// [`ClockError::NoPllFactors`] (nothing was changed); [`ClockError::BadRegister`] /
+/// [`ClockError::NoPllFactors`] (only the HSI16 was switched on); [`ClockError::BadRegister`] /
 /// [`ClockError::TooFast`] when the registers read back decode to no valid clock tree.
 pub fn set_up_clocks(sysclk_hz: u32) -> Result<ClockReport, ClockError> {
     const HSION: u32 = 1 << 8;
@@ -105,6 +105,10 @@ pub fn set_up_clocks(sysclk_hz: u32) -> Result<ClockReport, ClockError> {
         (msi, l4::src::MSI)
     };
     let pll = l4::Pll::for_sysclk(input, sysclk_hz)?;
+    // The PLL cannot be switched off while it is SYSCLK (as a bootloader may have left it):
+    // SYSCLK goes to the MSI first (SW = 00).
+    modify(RCC_CFGR, 0x3, 0);
+    wait(|| (read(RCC_CFGR) >> 2) & 0x3 == 0b00);
     modify(RCC_CR, PLLON, 0);
     wait(|| read(RCC_CR) & PLLRDY == 0);
     // Every field of PLLCFGR is written: P and Q off, R on.

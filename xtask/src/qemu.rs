@@ -305,7 +305,17 @@ pub struct RobotRun {
     pub elapsed: Duration,
 }
 
-/// Starts `elf` on `board` with USART1 and USART2 on listening Unix sockets and
+/// A firmware image for a board, and the line it prints when it is ready for input.
+pub struct Firmware<'a> {
+    /// The board it was built for.
+    pub board: Board,
+    /// The ELF.
+    pub elf: &'a Path,
+    /// The start of its ready line.
+    pub ready: &'a str,
+}
+
+/// Starts `firmware` on its board with USART1 and USART2 on listening Unix sockets and
 /// USART3 into a file; waits for the `ready` line; then writes `lidar` into USART1 and `link`
 /// into USART2, each from its own thread (QEMU takes a byte only when the firmware has read the
 /// previous one, so each write blocks until the firmware catches up), and waits for QEMU to
@@ -313,9 +323,7 @@ pub struct RobotRun {
 /// `timeout_s`. With `bridge`, USART3 is forwarded to it and its frames go into USART2
 /// (`crate::robot::bridge`).
 pub fn run_robot(
-    board: Board,
-    elf: &Path,
-    ready: &str,
+    firmware: Firmware<'_>,
     lidar: &[u8],
     link: &[u8],
     extra: &[String],
@@ -323,6 +331,7 @@ pub fn run_robot(
     bridge: Option<std::net::TcpStream>,
 ) -> Result<RobotRun> {
     use crate::robot::bridge::{self, Shared, Written};
+    let Firmware { board, elf, ready } = firmware;
     use std::sync::Arc;
     let dir = scratch()?;
     let (s1, s2, out3) = (

@@ -470,7 +470,16 @@ fn run_device(
         Vec::new()
     };
     let run = run_robot(
-        opts.board, &elf, READY, &s.lidar, &s.link, &extra, TIMEOUT_S, bridge,
+        crate::qemu::Firmware {
+            board: opts.board,
+            elf: &elf,
+            ready: READY,
+        },
+        &s.lidar,
+        &s.link,
+        &extra,
+        TIMEOUT_S,
+        bridge,
     )?;
     let out = &run.finished;
     for l in out.stdout.lines().filter(|l| l.starts_with("robot: ")) {
