@@ -11,10 +11,15 @@
 #[allow(clippy::type_complexity)]
 #[rustfmt::skip]
 pub mod fixed_cases;
+#[cfg(target_has_atomic = "32")]
+pub mod boards;
+pub mod clock_f4;
 pub mod reference_cases;
 #[cfg(target_has_atomic = "32")]
 pub mod serial;
 pub mod size_program;
+#[cfg(target_has_atomic = "32")]
+pub mod stm32l4;
 pub mod usart;
 
 use core::fmt;

@@ -4,9 +4,9 @@
 //!
 //! | line | pins (AF7) | clock | direction |
 //! |---|---|---|---|
-//! | USART1 | PA10 RX | APB2 (84 MHz) | the LiDAR's bytes in |
-//! | USART2 | PA3 RX | APB1 (42 MHz) | odometry and commands in |
-//! | USART3 | PB10 TX | APB1 (42 MHz) | estimates, heartbeats, errors out |
+//! | USART1 | PA10 RX | APB2 (84 MHz at 168 MHz) | the LiDAR's bytes in |
+//! | USART2 | PA3 RX | APB1 (42 MHz at 168 MHz) | odometry and commands in |
+//! | USART3 | PB10 TX | APB1 (42 MHz at 168 MHz) | estimates, heartbeats, errors out |
 //!
 //! **Receiving.** [`on_rx_interrupt`] runs in the USART's interrupt: it takes the byte from DR
 //! into the ring's producer end (`heapless::spsc`, one producer — the handler — and one
@@ -24,27 +24,6 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use cortex_m::peripheral::NVIC;
 use heapless::spsc::{Consumer, Producer};
 use stm32f4::stm32f405::{usart1::RegisterBlock, Interrupt, GPIOA, GPIOB, RCC};
-
-/// `(mantissa, fraction)` of USART_BRR for 16× oversampling: `USARTDIV = pclk / (16 · baud)`
-/// in 12.4 fixed point, rounded to the nearest sixteenth; `None` when it does not fit.
-pub const fn brr(pclk_hz: u32, baud: u32) -> Option<(u16, u8)> {
-    crate::usart::brr(crate::usart::Config {
-        pclk2_hz: pclk_hz,
-        baud,
-    })
-}
-
-/// APB1's clock with the usual 168 MHz core clock, Hz (USART2, USART3).
-pub const PCLK1_HZ: u32 = 42_000_000;
-/// APB2's clock with the usual 168 MHz core clock, Hz (USART1).
-pub const PCLK2_HZ: u32 = 84_000_000;
-
-/// Why a line could not be set up.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SerialError {
-    /// The baud rate cannot be reached from the line's clock.
-    BaudOutOfRange,
-}
 
 /// A receiver's state shared between its interrupt handler and the main loop.
 pub struct Backpressure {
@@ -101,26 +80,19 @@ pub fn enable_clocks_and_pins(rcc: &RCC, gpioa: &GPIOA, gpiob: &GPIOB) {
     gpiob.moder().modify(|_, w| w.moder10().alternate());
 }
 
-/// Programs a line for 8N1 at `baud` from `pclk_hz`, with the receiver (and its interrupt) or
-/// the transmitter enabled.
-///
-/// # Errors
-/// [`SerialError::BaudOutOfRange`].
-pub fn setup(
-    regs: &RegisterBlock,
-    pclk_hz: u32,
-    baud: u32,
-    rx: bool,
-    tx: bool,
-) -> Result<(), SerialError> {
-    let Some((mantissa, fraction)) = brr(pclk_hz, baud) else {
-        return Err(SerialError::BaudOutOfRange);
-    };
+/// Programs a line for 8N1 with the divider `brr` (USART_BRR, 12.4 fixed point: computed from
+/// the line's clock as it was read back, `beamfield_fixtures::clocks::usart_brr`), with the
+/// receiver (and its interrupt) or the transmitter enabled.
+pub fn setup(regs: &RegisterBlock, brr: u16, rx: bool, tx: bool) {
     regs.cr1().write(|w| w.ue().disabled());
     regs.cr2().write(|w| w.stop().stop1());
     regs.cr3().write(|w| w);
-    regs.brr()
-        .write(|w| w.div_mantissa().set(mantissa).div_fraction().set(fraction));
+    regs.brr().write(|w| {
+        w.div_mantissa()
+            .set(brr >> 4)
+            .div_fraction()
+            .set((brr & 0xF) as u8)
+    });
     regs.cr1().write(|w| {
         let w = w.ue().enabled();
         let w = if rx {
@@ -134,7 +106,6 @@ pub fn setup(
             w
         }
     });
-    Ok(())
 }
 
 /// The receive interrupt's work: one byte from DR into `ring`, or, with the ring full, the

@@ -214,6 +214,9 @@ enum Task {
         /// Only the host: the streams, the replay and its accuracy, without QEMU.
         #[arg(long, conflicts_with_all = ["count", "isr"])]
         host_only: bool,
+        /// Board: netduinoplus2 (STM32F405) or b-l475e-iot01a (STM32L475 at 80 MHz).
+        #[arg(long, value_enum, default_value = "netduinoplus2")]
+        board: qemu::Board,
     },
     DemoAssets,
     /// Regenerate firmware/src/reference_cases.rs from the host's f64 reference.
@@ -271,6 +274,7 @@ fn main() -> ExitCode {
             scan_topic,
             odom_topic,
             reference_topic,
+            board,
         } => bridge_port
             .map(robot::bridge::listen)
             .transpose()
@@ -283,6 +287,7 @@ fn main() -> ExitCode {
                         isr,
                         host_only,
                         bridge: listener.is_some(),
+                        board,
                         bag: bag.map(|path| robot::BagInput {
                             path,
                             topics: beamfield_bag::Topics {

@@ -24,6 +24,10 @@ pub enum Board {
     /// STM32F405 (Netduino Plus 2): 1 MiB flash, 128 KiB of its SRAM used (memory-stm32f405.x).
     #[value(name = "netduinoplus2")]
     Netduinoplus2,
+    /// STM32L475 (B-L475E-IOT01A kit): 1 MiB flash, 96 KiB SRAM1 (memory-stm32l475.x); its
+    /// RCC is modelled, and the robot firmware sets up 80 MHz.
+    #[value(name = "b-l475e-iot01a")]
+    BL475eIot01a,
 }
 
 impl Board {
@@ -32,6 +36,7 @@ impl Board {
         match self {
             Board::Mps2An386 => "mps2-an386",
             Board::Netduinoplus2 => "netduinoplus2",
+            Board::BL475eIot01a => "b-l475e-iot01a",
         }
     }
 
@@ -40,14 +45,25 @@ impl Board {
         repo_root().join(match self {
             Board::Mps2An386 => "memory.x",
             Board::Netduinoplus2 => "memory-stm32f405.x",
+            Board::BL475eIot01a => "memory-stm32l475.x",
         })
     }
 
-    /// SysTick's clock in QEMU's model of the board, Hz.
+    /// SysTick's clock in QEMU's model of the board, Hz (on the `b-l475e-iot01a`, the 80 MHz
+    /// the robot firmware sets up; the machine starts at the MSI's 4 MHz).
     pub fn core_hz(self) -> u64 {
         match self {
             Board::Mps2An386 => 25_000_000,
             Board::Netduinoplus2 => 168_000_000,
+            Board::BL475eIot01a => 80_000_000,
+        }
+    }
+
+    /// The robot firmware's cargo feature that selects this board (`firmware/src/boards/`).
+    pub fn robot_feature(self) -> Option<&'static str> {
+        match self {
+            Board::BL475eIot01a => Some("board-b-l475e-iot01a"),
+            _ => None,
         }
     }
 }
@@ -306,7 +322,17 @@ pub struct RobotRun {
     pub elapsed: Duration,
 }
 
-/// Starts `elf` on the `netduinoplus2` with USART1 and USART2 on listening Unix sockets and
+/// A firmware image for a board, and the line it prints when it is ready for input.
+pub struct Firmware<'a> {
+    /// The board it was built for.
+    pub board: Board,
+    /// The ELF.
+    pub elf: &'a Path,
+    /// The start of its ready line.
+    pub ready: &'a str,
+}
+
+/// Starts `firmware` on its board with USART1 and USART2 on listening Unix sockets and
 /// USART3 into a file; waits for the `ready` line; then writes `lidar` into USART1 and `link`
 /// into USART2, each from its own thread (QEMU takes a byte only when the firmware has read the
 /// previous one, so each write blocks until the firmware catches up), and waits for QEMU to
@@ -314,8 +340,7 @@ pub struct RobotRun {
 /// `timeout_s`. With `bridge`, USART3 is forwarded to it and its frames go into USART2
 /// (`crate::robot::bridge`).
 pub fn run_robot(
-    elf: &Path,
-    ready: &str,
+    firmware: Firmware<'_>,
     lidar: &[u8],
     link: &[u8],
     extra: &[String],
@@ -323,6 +348,7 @@ pub fn run_robot(
     bridge: Option<std::net::TcpStream>,
 ) -> Result<RobotRun> {
     use crate::robot::bridge::{self, Shared, Written};
+    let Firmware { board, elf, ready } = firmware;
     use std::sync::Arc;
     let dir = scratch()?;
     let (s1, s2, out3) = (
@@ -338,7 +364,7 @@ pub fn run_robot(
     let mut cmd = Command::new("timeout");
     cmd.arg(timeout_s.to_string()).arg(qemu_program()).args([
         "-machine",
-        "netduinoplus2",
+        board.machine(),
         "-nographic",
         "-semihosting-config",
         "enable=on,target=native",

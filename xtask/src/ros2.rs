@@ -137,6 +137,7 @@ pub fn ros2(scans: usize) -> Result {
             host_only: false,
             bridge: true,
             bag: None,
+            board: crate::qemu::Board::Netduinoplus2,
         },
         Some(&listener),
     );

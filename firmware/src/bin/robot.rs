@@ -1,10 +1,13 @@
 //! The firmware a robot's base controller runs: the LD06's bytes in on USART1 and wheel
 //! odometry and commands in on USART2, each received in its interrupt handler into a lock-free
 //! ring; the localizer ([`beamfield::robot::Robot`]) in the main loop; estimates, heartbeats and
-//! typed errors out on USART3 (the link protocol, `docs/link-protocol.md`). STM32F405 (QEMU
-//! `netduinoplus2`: the Nth `-serial` is USART N); `cargo xtask robot` plays the robot around it.
+//! typed errors out on USART3 (the link protocol, `docs/link-protocol.md`); `cargo xtask robot`
+//! plays the robot around it. The board (its clocks, pins and lines) is
+//! `beamfield_firmware::boards`: the STM32F405 (QEMU `netduinoplus2`) by default, the
+//! STM32L475 (QEMU `b-l475e-iot01a`) with the feature `board-b-l475e-iot01a`. On both the Nth
+//! `-serial` is USART N.
 //!
-//! The map (the Intel lab's 5 cm distance field and its free space) is linked into flash; the
+//! The map (the Intel lab's 5 cm distance field, tiled, and its free space) is linked into flash; the
 //! setup is `fixtures/src/robot_plan.rs`, which the host's replay uses too. The last good
 //! estimate is kept in RAM that a reset does not clear ([`SeedStore`]; a flash page on a
 //! product) and seeds the next start.
@@ -21,11 +24,17 @@ use beamfield::field::FreeSpace;
 use beamfield::link::Message;
 use beamfield::robot::{ByteSource, Probe, Robot, Seed, Sink, Stage};
 use beamfield::FieldView;
-use beamfield_firmware::serial::{self, Backpressure, PCLK1_HZ, PCLK2_HZ};
+#[cfg(feature = "board-b-l475e-iot01a")]
+use beamfield_firmware::boards::b_l475e_iot01a as board;
+#[cfg(not(feature = "board-b-l475e-iot01a"))]
+use beamfield_firmware::boards::netduinoplus2 as board;
+use beamfield_firmware::serial::Backpressure;
 use beamfield_firmware::{exit, println};
 use beamfield_fixtures::robot_plan::{self, baud, ring, BEAMS, CAPACITY};
+use board::Irq;
 use core::cell::RefCell;
 use core::sync::atomic::{AtomicU32, Ordering};
+use cortex_m::interrupt::InterruptNumber;
 use cortex_m::interrupt::Mutex;
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::NVIC;
@@ -35,9 +44,13 @@ use heapless::spsc::{Consumer, Producer, Queue};
 use panic_probe as _;
 #[cfg(not(feature = "defmt"))]
 use panic_semihosting as _;
-use stm32f4::stm32f405::{usart1::RegisterBlock, Interrupt, USART1, USART2, USART3};
 
-/// The 5 cm distance field of the Intel map (the demo's, `docs/demo.md`).
+/// The 5 cm distance field of the Intel map (the demo's, `docs/demo.md`), tiled with the
+/// feature `tiled` (297,640 bytes, the same distances bit for bit; `docs/blob-format.md`), else
+/// raw (781,063 bytes). `cargo xtask robot` builds it tiled.
+#[cfg(feature = "tiled")]
+static BLOB: &[u8] = include_bytes!("../../assets/intel-tiled.bin");
+#[cfg(not(feature = "tiled"))]
 static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
 /// Its known-free cells, for global localization (`docs/free-space-format.md`).
 static FREE: &[u8] = include_bytes!("../../assets/intel-free-space.bin");
@@ -59,31 +72,12 @@ static LINK_STATE: Backpressure = Backpressure::new();
 /// Milliseconds since start (SysTick).
 static MILLIS: AtomicU32 = AtomicU32::new(0);
 
-fn regs(which: Interrupt) -> &'static RegisterBlock {
-    // SAFETY: the register blocks are memory-mapped hardware at fixed addresses for the whole
-    // run. The main loop and the handlers touch disjoint bits, except CR1.RXNEIE, which the
-    // handler clears only while it is set and the main loop sets only after the handler
-    // cleared it (`serial::resume`), so no read-modify-write of CR1 races another.
-    #[allow(unsafe_code)]
-    unsafe {
-        match which {
-            Interrupt::USART2 => &*USART2::ptr(),
-            Interrupt::USART3 => &*USART3::ptr(),
-            _ => &*USART1::ptr(),
-        }
-    }
-}
-
-fn on_rx(
-    line: Interrupt,
-    ring: &Mutex<RefCell<Option<Producer<'static, u8>>>>,
-    state: &Backpressure,
-) {
+fn on_rx(line: Irq, ring: &Mutex<RefCell<Option<Producer<'static, u8>>>>, state: &Backpressure) {
     #[cfg(feature = "count-isr")]
     beamfield_firmware::bench_mark_start();
     cortex_m::interrupt::free(|cs| {
         if let Some(p) = ring.borrow(cs).borrow_mut().as_mut() {
-            serial::on_rx_interrupt(regs(line), line, p, state);
+            board::on_rx(line, p, state);
         }
     });
     #[cfg(feature = "count-isr")]
@@ -91,14 +85,14 @@ fn on_rx(
 }
 
 /// Every device interrupt lands here (no device vector table is linked: the programs share
-/// one runtime setup with the MPS2 board's): USART1 is IRQ 37, USART2 is IRQ 38.
+/// one runtime setup with the MPS2 board's): the board's LiDAR and link receive interrupts.
 #[exception]
 #[allow(unsafe_code)]
 unsafe fn DefaultHandler(irqn: i16) {
-    match irqn {
-        37 => on_rx(Interrupt::USART1, &LIDAR_IN, &LIDAR_STATE),
-        38 => on_rx(Interrupt::USART2, &LINK_IN, &LINK_STATE),
-        _ => {}
+    if irqn == board::LIDAR_IRQ.number() as i16 {
+        on_rx(board::LIDAR_IRQ, &LIDAR_IN, &LIDAR_STATE);
+    } else if irqn == board::LINK_IRQ.number() as i16 {
+        on_rx(board::LINK_IRQ, &LINK_IN, &LINK_STATE);
     }
 }
 
@@ -263,10 +257,7 @@ impl ByteSource for Input<'_> {
 
 #[entry]
 fn main() -> ! {
-    let (Some(dp), Some(mut cp)) = (
-        stm32f4::stm32f405::Peripherals::take(),
-        cortex_m::Peripherals::take(),
-    ) else {
+    let Some(mut cp) = cortex_m::Peripherals::take() else {
         println!("robot: peripherals taken twice");
         exit(false)
     };
@@ -315,31 +306,38 @@ fn main() -> ! {
         saved: 0,
     };
 
-    serial::enable_clocks_and_pins(&dp.RCC, &dp.GPIOA, &dp.GPIOB);
-    let lines = [
-        serial::setup(regs(Interrupt::USART1), PCLK2_HZ, baud::LIDAR, true, false),
-        serial::setup(
-            regs(Interrupt::USART2),
-            PCLK1_HZ,
-            baud::LINK_IN,
-            true,
-            false,
-        ),
-        serial::setup(
-            regs(Interrupt::USART3),
-            PCLK1_HZ,
-            baud::LINK_OUT,
-            false,
-            true,
-        ),
-    ];
-    if lines.iter().any(|l| l.is_err()) {
-        println!("robot: a baud rate cannot be set from its clock");
+    let started = match board::init([baud::LIDAR, baud::LINK_IN, baud::LINK_OUT]) {
+        Ok(s) => s,
+        Err(e) => {
+            println!("robot: {}: {}", board::NAME, e);
+            exit(false)
+        }
+    };
+    // 1 ms ticks from the core clock the board reports.
+    let Some(reload) = beamfield_fixtures::clocks::systick_reload(started.clocks.hclk_hz, 1_000)
+    else {
+        println!(
+            "robot: no 1 ms SysTick reload from {} Hz",
+            started.clocks.hclk_hz
+        );
         exit(false)
-    }
-    // 1 ms ticks from the 168 MHz core clock.
+    };
+    let c = &started.clocks;
+    println!(
+        "robot: clocks: {}: SYSCLK {} Hz ({:?}; {}), HCLK {} Hz, APB1 {} Hz, APB2 {} Hz, flash {} wait states; SysTick reload {}; USART BRR {:?}",
+        board::NAME,
+        c.sysclk_hz,
+        c.source,
+        started.note,
+        c.hclk_hz,
+        c.pclk1_hz,
+        c.pclk2_hz,
+        started.wait_states,
+        reload,
+        started.brr
+    );
     cp.SYST.set_clock_source(SystClkSource::Core);
-    cp.SYST.set_reload(168_000 - 1);
+    cp.SYST.set_reload(reload);
     cp.SYST.clear_current();
     cp.SYST.enable_counter();
     cp.SYST.enable_interrupt();
@@ -347,8 +345,8 @@ fn main() -> ! {
     // the main loop relies on them being masked.
     #[allow(unsafe_code)]
     unsafe {
-        NVIC::unmask(Interrupt::USART1);
-        NVIC::unmask(Interrupt::USART2);
+        NVIC::unmask(board::LIDAR_IRQ);
+        NVIC::unmask(board::LINK_IRQ);
         cortex_m::interrupt::enable();
     }
     println!(
@@ -396,15 +394,13 @@ fn main() -> ! {
         if link.taken != link_before {
             last_link_ms = now;
         }
-        serial::resume(
-            regs(Interrupt::USART1),
-            Interrupt::USART1,
+        board::resume(
+            board::LIDAR_IRQ,
             lidar.ring.len() < lidar.ring.capacity(),
             &LIDAR_STATE,
         );
-        serial::resume(
-            regs(Interrupt::USART2),
-            Interrupt::USART2,
+        board::resume(
+            board::LINK_IRQ,
             link.ring.len() < link.ring.capacity(),
             &LINK_STATE,
         );
@@ -427,7 +423,7 @@ fn main() -> ! {
         if progress.processed {
             last_heartbeat_ms = now;
         }
-        tx_bytes = tx_bytes.wrapping_add(serial::pump(regs(Interrupt::USART3), &mut tx_c));
+        tx_bytes = tx_bytes.wrapping_add(board::pump(&mut tx_c));
         #[cfg(feature = "emulator")]
         if now.wrapping_sub(last_lidar_ms) >= EXIT_AFTER_MS
             && now.wrapping_sub(last_link_ms) >= EXIT_AFTER_MS

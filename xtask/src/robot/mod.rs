@@ -1,5 +1,6 @@
 //! `cargo xtask robot`: the host plays the robot around the firmware `robot`
-//! (`firmware/src/bin/robot.rs`) on QEMU's `netduinoplus2`.
+//! (`firmware/src/bin/robot.rs`) on QEMU's `netduinoplus2` (STM32F405) or `b-l475e-iot01a`
+//! (STM32L475, `--board`).
 //!
 //! 1. The Intel lab log becomes what a robot sends ([`streams`]): every scan as an LD06
 //!    revolution at 10 Hz into USART1, and into USART2 the wheel encoders at 50 Hz of a
@@ -70,6 +71,8 @@ pub struct Options {
     pub bridge: bool,
     /// A bag's scans, odometry and reference instead of the Intel log and simulated wheels.
     pub bag: Option<BagInput>,
+    /// The board (QEMU machine, memory layout, the firmware's board module).
+    pub board: Board,
 }
 
 /// Frames sent by the application, in order.
@@ -88,12 +91,13 @@ fn assets() -> Result<(Vec<u8>, Vec<u8>)> {
         let p = dir.join(name);
         fs::read(&p).map_err(|e| Error::io(&p, e))
     };
-    Ok((read("intel.bin")?, read("intel-free-space.bin")?))
+    // The blob the firmware links (feature `tiled`, see `features`).
+    Ok((read("intel-tiled.bin")?, read("intel-free-space.bin")?))
 }
 
 /// The application on the host over the whole streams, as the device runs it.
 fn replay(streams: &Streams, blob: &[u8], free: &[u8]) -> Result<(Vec<Message>, RobotCounters)> {
-    let view = FieldView::parse(blob).map_err(|e| Error::Host(format!("intel.bin: {e}")))?;
+    let view = FieldView::parse(blob).map_err(|e| Error::Host(format!("intel-tiled.bin: {e}")))?;
     let free =
         FreeSpace::parse(free).map_err(|e| Error::Host(format!("intel-free-space.bin: {e}")))?;
     let layout = robot_plan::layout().map_err(|e| Error::Host(e.into()))?;
@@ -315,7 +319,7 @@ pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result 
     let mut bridged_from_us = None;
     if let (true, Some(listener)) = (opts.bridge, listener) {
         // Built before the bridge is waited for: then the run starts as soon as it connects.
-        build_program(Board::Netduinoplus2, BIN, &features(&opts))?;
+        build_program(opts.board, BIN, &features(&opts))?;
         let conn = bridge::accept(listener)?;
         let (d, written) = run_device(&opts, &s, Some(conn))?;
         println!(
@@ -440,7 +444,9 @@ pub fn robot(opts: Options, listener: Option<&std::net::TcpListener>) -> Result 
 
 /// The firmware's features for `opts`.
 fn features(opts: &Options) -> Vec<&'static str> {
-    let mut features = vec!["emulator"];
+    // The Intel map tiled: 297,640 bytes of flash in place of 781,063, the same distances.
+    let mut features = vec!["emulator", "tiled"];
+    features.extend(opts.board.robot_feature());
     if opts.count {
         features.push("count");
     }
@@ -456,13 +462,25 @@ fn run_device(
     bridge: Option<std::net::TcpStream>,
 ) -> Result<(Vec<Message>, bridge::Written)> {
     ensure_qemu()?;
-    let elf = build_program(Board::Netduinoplus2, BIN, &features(opts))?;
+    let elf = build_program(opts.board, BIN, &features(opts))?;
+    image_size(opts.board, &elf)?;
     let extra = if opts.count || opts.isr {
         qemu_args(&elf, ", or run `cargo xtask robot` without --count")?
     } else {
         Vec::new()
     };
-    let run = run_robot(&elf, READY, &s.lidar, &s.link, &extra, TIMEOUT_S, bridge)?;
+    let run = run_robot(
+        crate::qemu::Firmware {
+            board: opts.board,
+            elf: &elf,
+            ready: READY,
+        },
+        &s.lidar,
+        &s.link,
+        &extra,
+        TIMEOUT_S,
+        bridge,
+    )?;
     let out = &run.finished;
     for l in out.stdout.lines().filter(|l| l.starts_with("robot: ")) {
         println!("device {l}");
@@ -472,7 +490,7 @@ fn run_device(
         return Err(crate::qemu::failure(
             out.code,
             "`robot`",
-            "netduinoplus2",
+            opts.board.machine(),
             "see its output",
         ));
     }
@@ -487,12 +505,44 @@ fn run_device(
         run.elapsed.as_secs_f64()
     );
     if opts.count {
-        budget(&Regions::read(&out.stdout, &out.stderr)?, s)?;
+        budget(&Regions::read(&out.stdout, &out.stderr)?, s, opts.board)?;
     }
     if opts.isr {
         isr(&out.stderr, s)?;
     }
     Ok((device, run.usart2))
+}
+
+/// Highest share of the board's flash the image may take: room for the next map.
+const FLASH_LIMIT: f64 = 0.85;
+
+/// The image's flash and RAM against the board's memory layout; fails above [`FLASH_LIMIT`].
+fn image_size(board: Board, elf: &std::path::Path) -> Result {
+    use crate::elf::{gsec, region_length, sections};
+    let m = sections(&crate::toolchain::llvm_tool("llvm-size")?, elf)?;
+    let layout_path = board.memory_x();
+    let layout = fs::read_to_string(&layout_path).map_err(|e| Error::io(&layout_path, e))?;
+    let (flash_len, ram_len) = (
+        region_length(&layout, "FLASH")?,
+        region_length(&layout, "RAM")?,
+    );
+    let flash = gsec(&m, &[".vector_table", ".text", ".rodata", ".data"]);
+    let ram = gsec(&m, &[".data", ".bss", ".uninit"]);
+    println!(
+        "image ({}): flash {flash} B of {flash_len} ({:.1} %; .text {}, .rodata {}), RAM {ram} B of {ram_len} ({:.1} %; the rest is stack)",
+        board.machine(),
+        flash as f64 / flash_len as f64 * 100.0,
+        gsec(&m, &[".text"]),
+        gsec(&m, &[".rodata"]),
+        ram as f64 / ram_len as f64 * 100.0,
+    );
+    if flash as f64 > FLASH_LIMIT * flash_len as f64 {
+        return Err(Error::Requirement(format!(
+            "the image takes {flash} B, over {:.0} % of the board's {flash_len} B of flash",
+            FLASH_LIMIT * 100.0
+        )));
+    }
+    Ok(())
 }
 
 /// Every estimate and error report, and every heartbeat's time, scans and updates, equal; the
@@ -555,13 +605,14 @@ fn same_frames(host: &[Message], device: &[Message]) -> Result<usize> {
     Ok(extra.len())
 }
 
-/// Instructions per revolution by stage against 100 ms at 168 MHz.
-fn budget(r: &Regions, s: &Streams) -> Result {
+/// Instructions per revolution by stage against 100 ms at the board's core clock.
+fn budget(r: &Regions, s: &Streams, board: Board) -> Result {
     r.expect(&regions::ALL)?;
     let revs = s.revolutions as f64;
-    let core_hz = Board::Netduinoplus2.core_hz() as f64;
+    let core_hz = board.core_hz() as f64;
+    let mhz = core_hz / 1e6;
     let budget = core_hz * 0.1;
-    println!("time budget (QEMU plugin, exact counts; 168 MHz at 1 cycle per instruction, so 16.8 M instructions per 100 ms revolution):");
+    println!("time budget (QEMU plugin, exact counts; {mhz:.0} MHz at 1 cycle per instruction, so {:.1} M instructions per 100 ms revolution):", budget / 1e6);
     let mut total = 0.0;
     let rows = [
         (regions::LIDAR, s.lidar.len() as f64, "byte"),
@@ -586,7 +637,7 @@ fn budget(r: &Regions, s: &Streams) -> Result {
         );
     }
     println!(
-        "  total {:.0} instructions per revolution on average = {:.2} ms at 168 MHz ({:.1} % of 100 ms)",
+        "  total {:.0} instructions per revolution on average = {:.2} ms at {mhz:.0} MHz ({:.1} % of 100 ms)",
         total,
         total / core_hz * 1e3,
         total / budget * 100.0
