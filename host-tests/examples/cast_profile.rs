@@ -2,8 +2,8 @@
 //! number of times, for instruction and branch counting under
 //! `valgrind --tool=cachegrind --branch-sim=yes` (no timing of its own).
 //!
-//! `cargo build --release -p host-tests --example cast_profile`, then
-//! `valgrind --tool=cachegrind --branch-sim=yes target/release/examples/cast_profile 3`;
+//! `cargo build --profile profiling -p host-tests --example cast_profile`, then
+//! `valgrind --tool=cachegrind --branch-sim=yes target/profiling/examples/cast_profile 3`;
 //! `0` repetitions runs only the harness (its own count, to subtract). A second argument picks
 //! what is cast: `crate` (default, `BeamFieldModel::cast_layout`), `one` (the crate's casts one
 //! ray at a time, `RayCaster::cast_dir`) or `amcl` (the race's AMCL-style Bresenham baseline).

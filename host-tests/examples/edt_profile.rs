@@ -1,8 +1,8 @@
 //! Runs the exact transform of the `field` bench's grids a given number of times, for
 //! instruction counting under `valgrind --tool=cachegrind` (no timing of its own).
 //!
-//! `cargo build --release -p host-tests --example edt_profile`, then
-//! `valgrind --tool=cachegrind target/release/examples/edt_profile 400 20` (or `willow 5`);
+//! `cargo build --profile profiling -p host-tests --example edt_profile`, then
+//! `valgrind --tool=cachegrind target/profiling/examples/edt_profile 400 20` (or `willow 5`);
 //! the same with a third argument `skip` counts everything but the transform.
 
 use beamfield::field::{edt_scratch_len, squared_edt, EdtScratch, EDT_INFINITY};

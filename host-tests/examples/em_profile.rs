@@ -1,8 +1,8 @@
 //! Runs the `em` bench's fit (24 iterations over the same 4,500 beams) a given number of times,
 //! for instruction counting under `valgrind --tool=cachegrind` (no timing of its own).
 //!
-//! `cargo build --release -p host-tests --example em_profile`, then
-//! `valgrind --tool=cachegrind target/release/examples/em_profile truncated 10` (or `textbook`,
+//! `cargo build --profile profiling -p host-tests --example em_profile`, then
+//! `valgrind --tool=cachegrind target/profiling/examples/em_profile truncated 10` (or `textbook`,
 //! `exact`); `skip` as the update runs everything but the fits (the harness's own count).
 //! Prints the passes of one fit, so a count can be divided per pass and per reading.
 

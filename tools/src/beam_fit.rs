@@ -131,7 +131,12 @@ impl std::fmt::Display for FitError {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
             Self::Read(e) => write!(f, "{e}"),
-            Self::Blob(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Blob(p, e) => write!(
+                f,
+                "{}: {e}{}",
+                p.display(),
+                crate::input::field_file::blob_hint(e)
+            ),
             Self::RayCast(e) => write!(f, "blob cannot be ray cast: {e}"),
             Self::Log(e) => write!(f, "{e}"),
             Self::Intrinsics(e) => write!(f, "start intrinsics: {e}"),

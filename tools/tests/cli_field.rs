@@ -106,6 +106,67 @@ fn missing_map_is_a_clear_error() {
     assert!(err.contains("cannot read /nonexistent/map.yaml"), "{err}");
 }
 
+/// A file of another kind where the map's YAML, a field file or a CARMEN log goes: said as such.
+/// The map's image given as its YAML used to be "stream did not contain valid UTF-8"; as a log,
+/// "line 5: longer than 65536 bytes (skipped)" or, in `log info`, a log of 0 scans.
+#[test]
+fn a_file_of_another_kind_is_named() {
+    let dir = std::env::temp_dir().join(format!("beamfield-cli-kind-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let pgm = data_dir().join("map_turtlebot3_world/map.pgm");
+    let blob = dir.join("tb3.bin");
+    let yaml = data_dir().join("map_turtlebot3_world/map.yaml");
+    run_json(
+        bin()
+            .args(["--json", "field", "build"])
+            .arg(&yaml)
+            .arg("-o")
+            .arg(&blob),
+    );
+    for (input, what) in [(&pgm, "an image"), (&blob, "a distance-field blob")] {
+        let st = bin()
+            .args(["field", "build"])
+            .arg(input)
+            .arg("-o")
+            .arg(dir.join("x.bin"))
+            .output()
+            .unwrap();
+        assert!(!st.status.success());
+        let err = String::from_utf8(st.stderr).unwrap();
+        assert!(
+            err.contains(&format!(
+                "{} is {what}; pass the map's YAML (the file that names ",
+                input.display()
+            )),
+            "{err}"
+        );
+    }
+    let fails = |args: &[&std::ffi::OsStr]| {
+        let st = bin().args(args).output().unwrap();
+        assert!(!st.status.success(), "{args:?}");
+        String::from_utf8(st.stderr).unwrap()
+    };
+    let err = fails(&["field".as_ref(), "info".as_ref(), yaml.as_os_str()]);
+    assert!(
+        err.contains(
+            "not a distance-field blob (bad magic); a field file is what `beamfield \
+             field build MAP.yaml -o FIELD.bin` writes"
+        ),
+        "{err}"
+    );
+    for (input, what) in [(&pgm, "an image"), (&blob, "a distance-field blob")] {
+        let err = fails(&["log".as_ref(), "info".as_ref(), input.as_os_str()]);
+        assert!(
+            err.contains(&format!(
+                "{} is {what}, not a CARMEN log (a text file of FLASER lines)",
+                input.display()
+            )),
+            "{err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `--encoding tiled`, `field info` and `field encode`: the tiled TurtleBot3 blob has the size
 /// the format gives for its 1,452 distinct tiles (48 + 8 + 2·96·96 + 16·1,452 bytes), answers
 /// queries as the raw one does, and encodes back to the raw blob byte for byte.

@@ -251,3 +251,123 @@ fn errors_are_typed_and_help_explains() {
         "{help}"
     );
 }
+
+/// A stream decoded with another protocol's `--format` is refused (not "0 frames ok" and
+/// success), naming the protocol whose decoder finds its frames; `ld19` is the LD06 protocol.
+#[test]
+fn wrong_format_is_refused_and_the_right_one_named() {
+    let formats = ["ld06", "rplidar", "xv11", "ydlidar"];
+    for format in formats {
+        let stream = tmp(&format!("sniff-{format}.bin"));
+        common::run_json(common::bin().args([
+            "--json",
+            "lidar",
+            "encode",
+            "--log",
+            &intel(),
+            "--format",
+            format,
+            "--scans",
+            "3",
+            "--garbage",
+            "300",
+            "--seed",
+            "5",
+            "-o",
+            &stream,
+        ]));
+        let right = common::run_json(
+            common::bin().args(["--json", "lidar", "decode", "--format", format, &stream]),
+        );
+        assert!(
+            right["decoder"]["frames_ok"].as_u64().unwrap() > 0,
+            "{format}"
+        );
+        for other in formats.iter().filter(|f| **f != format) {
+            let out = beamfield(&["lidar", "decode", "--format", other, &stream]);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success(), "{format} decoded as {other}: {err}");
+            assert!(
+                err.contains(&format!("the stream does not look like {other}; it looks like {format} (try --format {format})")),
+                "{format} decoded as {other}: {err}"
+            );
+        }
+    }
+    // The LD19 speaks the LD06 protocol: the same report under either name.
+    let stream = tmp("sniff-ld06.bin");
+    let ld06 = common::run_json(
+        common::bin().args(["--json", "lidar", "decode", "--format", "ld06", &stream]),
+    );
+    let ld19 = common::run_json(
+        common::bin().args(["--json", "lidar", "decode", "--format", "ld19", &stream]),
+    );
+    assert_eq!(ld06, ld19);
+}
+
+/// An empty capture and one of random bytes (no protocol's frames) are refused, saying so.
+#[test]
+fn streams_without_frames_are_refused() {
+    let empty = tmp("empty.bin");
+    std::fs::write(&empty, b"").unwrap();
+    let out = beamfield(&["lidar", "decode", "--format", "ld06", &empty]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("empty.bin is empty: no ld06 frame to decode"),
+        "{err}"
+    );
+    // 20,000 pseudo-random bytes (xorshift64).
+    let noise = tmp("noise.bin");
+    let mut x = 0x9e37_79b9_7f4a_7c15_u64;
+    let bytes: Vec<u8> = (0..20_000)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 56) as u8
+        })
+        .collect();
+    std::fs::write(&noise, bytes).unwrap();
+    let out = beamfield(&["lidar", "decode", "--format", "xv11", &noise]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no xv11 frame in 20000 bytes: the stream does not look like xv11; no other decoder (ld06, rplidar, ydlidar) finds a frame in its first 16384 bytes either"),
+        "{err}"
+    );
+}
+
+/// Two real LD06-family frames (not written by this project's encoder): the example frame of
+/// LDROBOT's *LD19 Development Manual* (v2.3) and a frame captured from a youyeetoo FHL-LD20
+/// printed in UC San Diego's ECE 196 "UART Communication" tutorial (the same frames as
+/// host-tests/tests/lidar_captures.rs). `--format ld19` decodes both; `--format xv11` is refused
+/// and names ld06.
+#[test]
+fn real_ld19_frames_decode_as_ld19_and_are_named_under_another_format() {
+    const LD19_MANUAL: &str =
+        "54 2C 68 08 AB 7E E0 00 E4 DC 00 E2 D9 00 E5 D5 00 E3 D3 00 E4 D0 00 \
+         E9 CD 00 E4 CA 00 E2 C7 00 E9 C5 00 E5 C2 00 E5 C0 00 E5 BE 82 3A 1A 50";
+    const LD20_CAPTURE: &str =
+        "54 2C 74 08 B0 86 00 00 D4 00 00 D4 00 00 D4 00 00 D4 00 00 D4 00 00 \
+         D5 00 00 D5 00 00 49 00 00 5F 00 00 B0 00 00 D2 00 00 D4 02 89 1E 09 1F";
+    let bytes: Vec<u8> = format!("{LD19_MANUAL} {LD20_CAPTURE}")
+        .split_whitespace()
+        .map(|b| u8::from_str_radix(b, 16).unwrap())
+        .collect();
+    let stream = tmp("ld19-real.bin");
+    std::fs::write(&stream, &bytes).unwrap();
+    let dec = common::run_json(
+        common::bin().args(["--json", "lidar", "decode", "--format", "ld19", &stream]),
+    );
+    assert_eq!(dec["format"], "ld06");
+    assert_eq!(dec["decoder"]["frames_ok"], 2);
+    let out = beamfield(&["lidar", "decode", "--format", "xv11", &stream]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(
+            "no xv11 frame in 94 bytes: the stream does not look like xv11; it looks like ld06"
+        ),
+        "{err}"
+    );
+}

@@ -33,8 +33,42 @@ fn firmware_build(features: Option<&str>) -> Result<Command> {
     Ok(cmd)
 }
 
+/// Says on stderr that a firmware build (a `cargo build` in `firmware/`) starts, and, when the
+/// firmware has no build directory yet for its target and profile, that this first build
+/// compiles the firmware's dependencies too and takes minutes. Printed before the nested cargo
+/// runs, so a cold run is never silent (the nested cargo's own progress follows on stderr).
+pub fn announce_firmware_build(cmd: &Command) {
+    let args: Vec<String> = cmd
+        .get_args()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    let profile = if args.iter().any(|a| a == "--release") {
+        "release"
+    } else {
+        "debug"
+    };
+    let target = args
+        .iter()
+        .skip_while(|a| *a != "--target")
+        .nth(1)
+        .map_or(FIRMWARE_TARGET, String::as_str);
+    let firmware = repo_root().join("firmware");
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map_or_else(|| firmware.join("target"), |d| firmware.join(d));
+    let cold = !target_dir.join(target).join(profile).join("deps").is_dir();
+    eprintln!(
+        "xtask: building the firmware ({target}, {profile}){}",
+        if cold {
+            "; first build in this tree: its dependencies are compiled first, several minutes …"
+        } else {
+            " …"
+        }
+    );
+}
+
 /// Runs a firmware build and returns the executables it produced, by program name.
 fn executables(cmd: &mut Command) -> Result<BTreeMap<String, PathBuf>> {
+    announce_firmware_build(cmd);
     eprintln!("+ (cd firmware && {})", show(cmd));
     let out = capture(cmd)?;
     let mut elves = BTreeMap::new();
@@ -77,8 +111,8 @@ pub fn build_program(board: Board, bin: &str, features: &[&str]) -> Result<PathB
         .ok_or_else(|| Error::Output(format!("cargo built no `{bin}` executable")))
 }
 
-/// The features a package declares (without `default`).
-fn features_of(manifest: &Path, package: &str) -> Result<Vec<String>> {
+/// A package's record in `cargo metadata` (its features, its `[package.metadata]`, …).
+fn package_of(manifest: &Path, package: &str) -> Result<serde_json::Value> {
     let meta = capture(
         cargo()
             .args([
@@ -92,10 +126,16 @@ fn features_of(manifest: &Path, package: &str) -> Result<Vec<String>> {
     )?;
     let meta: serde_json::Value =
         serde_json::from_str(&meta).map_err(|e| Error::Output(format!("cargo metadata: {e}")))?;
-    let pkg = meta["packages"]
+    meta["packages"]
         .as_array()
         .and_then(|ps| ps.iter().find(|p| p["name"] == package))
-        .ok_or_else(|| Error::Output(format!("package {package} not in {}", manifest.display())))?;
+        .cloned()
+        .ok_or_else(|| Error::Output(format!("package {package} not in {}", manifest.display())))
+}
+
+/// The features a package declares (without `default`).
+fn features_of(manifest: &Path, package: &str) -> Result<Vec<String>> {
+    let pkg = package_of(manifest, package)?;
     Ok(pkg["features"]
         .as_object()
         .map(|f| f.keys().filter(|k| *k != "default").cloned().collect())
@@ -136,4 +176,50 @@ pub fn cross() -> Result {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Library features that add no public item (they swap an implementation behind the same
+    /// API): docs.rs has nothing to show for them.
+    const NO_ITEMS: [&str; 1] = ["micromath"];
+
+    fn strings(v: &serde_json::Value) -> Vec<String> {
+        v.as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|s| s.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    #[test]
+    fn docs_rs_documents_every_feature_with_items() {
+        let manifest = repo_root().join("Cargo.toml");
+        let pkg = package_of(&manifest, "beamfield").unwrap();
+        let defaults = strings(&pkg["features"]["default"]);
+        let docs_rs = strings(&pkg["metadata"]["docs"]["rs"]["features"]);
+        assert!(
+            !docs_rs.is_empty(),
+            "no [package.metadata.docs.rs] features in {}",
+            manifest.display()
+        );
+        for f in features_of(&manifest, "beamfield").unwrap() {
+            let shown = defaults.contains(&f) || docs_rs.contains(&f);
+            assert!(
+                shown || NO_ITEMS.contains(&f.as_str()),
+                "feature `{f}` is neither a default nor in [package.metadata.docs.rs] features: \
+                 docs.rs would leave its items out"
+            );
+        }
+        for f in &docs_rs {
+            assert!(
+                pkg["features"].get(f).is_some(),
+                "docs.rs asks for `{f}`, which the crate does not declare"
+            );
+        }
+    }
 }

@@ -1,6 +1,7 @@
 //! `cargo xtask nopanic`: the link-time proof that the scoring core has no panic path, and
 //! `--show-failure`, which shows that proof failing on a deliberate panic.
 
+use crate::cross::announce_firmware_build;
 use crate::error::{Error, Result};
 use crate::process::{cargo, repo_root, show, spawn_error};
 use crate::toolchain::{ensure_target, FIRMWARE_TARGET};
@@ -30,6 +31,7 @@ pub fn nopanic(show_failure: bool) -> Result {
         "--features",
         features,
     ]);
+    announce_firmware_build(&cmd);
     eprintln!("+ (cd firmware && {})", show(&cmd));
     let out = cmd
         .stdin(Stdio::null())

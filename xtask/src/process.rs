@@ -115,3 +115,25 @@ pub fn run_to_files(cmd: &mut Command, name: &str) -> Result<Finished> {
         stderr,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::repo_root;
+
+    /// A cold `cargo xtask …` compiles xtask and its dependencies before the task runs; with
+    /// `--quiet` in the alias that took minutes without a line of output.
+    #[test]
+    fn the_xtask_alias_lets_cargo_say_what_it_builds() {
+        let path = repo_root().join(".cargo/config.toml");
+        let config = std::fs::read_to_string(&path).unwrap();
+        let alias = config
+            .lines()
+            .find(|l| l.trim_start().starts_with("xtask ="))
+            .unwrap_or_else(|| panic!("no xtask alias in {}", path.display()));
+        assert!(alias.contains("--package xtask"), "{alias}");
+        assert!(
+            !alias.contains("--quiet") && !alias.contains(" -q"),
+            "the alias silences cargo: {alias}"
+        );
+    }
+}

@@ -66,7 +66,12 @@ impl std::fmt::Display for FieldError {
                 "standard input line {n}: longer than {} bytes (stopped reading)",
                 crate::input::limits::MAX_QUERY_LINE_BYTES
             ),
-            Self::Blob(p, e) => write!(f, "{}: {e}", p.display()),
+            Self::Blob(p, e) => write!(
+                f,
+                "{}: {e}{}",
+                p.display(),
+                crate::input::field_file::blob_hint(e)
+            ),
             Self::Edt(e) => write!(f, "distance transform: {e}"),
             Self::BadMaxDist(d) => write!(f, "--max-dist {d}: must be finite and > 0"),
             Self::Header(e) => write!(f, "map cannot be stored as a blob: {e}"),

@@ -22,6 +22,17 @@ pub fn parse_field_file(bytes: &[u8]) -> Result<FieldView<'_>, BlobError> {
     }
 }
 
+/// What follows a [`BlobError`] in a message for a user: for a file that is no blob at all (a
+/// map's YAML or image, a log), how a field file is made; nothing for the other errors.
+pub fn blob_hint(e: &BlobError) -> &'static str {
+    if *e == BlobError::BadMagic {
+        "; a field file is what `beamfield field build MAP.yaml -o FIELD.bin` writes from a \
+         map_server map"
+    } else {
+        ""
+    }
+}
+
 /// Reads a field file (blob and optional free-space section): a regular file of at most
 /// [`crate::input::limits::MAX_FIELD_FILE_BYTES`].
 ///

@@ -4,6 +4,7 @@
 pub use beamfield_bag as bag;
 pub mod carmen;
 pub mod field_file;
+pub mod kind;
 pub mod limits;
 pub mod map;
 pub mod ring;

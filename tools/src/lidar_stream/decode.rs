@@ -193,8 +193,50 @@ pub fn decode_stream<const N: usize>(
     d.finish()
 }
 
+/// Bytes at the start of a capture that [`sniff`] tries every decoder on: 16 KiB, at least 340
+/// frames of any of the protocols (an XV-11 packet is 22 bytes, a full YDLIDAR packet 90, an
+/// LD06 frame 47), after the few hundred bytes a sensor may send before its first frame.
+pub const SNIFF_BYTES: usize = 16 * 1024;
+
+/// The frames each protocol's decoder finds in `head` (the start of a stream), in the order of
+/// [`Format::ALL`].
+pub fn sniff(head: &[u8]) -> Vec<(Format, u32)> {
+    Format::ALL
+        .iter()
+        .map(|&f| {
+            let mut d = AnyDecoder::new(f);
+            d.feed(head, |_| {});
+            d.finish(|_| {});
+            (f, d.stats().frames_ok)
+        })
+        .collect()
+}
+
+/// The protocol other than `not` whose decoder finds the most frames in `head`; `None` when
+/// none finds one.
+pub fn looks_like(head: &[u8], not: Format) -> Option<Format> {
+    sniff(head)
+        .into_iter()
+        .filter(|&(f, n)| f != not && n > 0)
+        .max_by_key(|&(_, n)| n)
+        .map(|(f, _)| f)
+}
+
+/// What [`decode_path`] read from a capture.
+#[derive(Clone, Debug)]
+pub struct Capture {
+    /// The scans and counters.
+    pub decoded: Decoded,
+    /// Bytes read.
+    pub bytes: u64,
+    /// The first [`SNIFF_BYTES`] bytes (fewer for a shorter capture), kept for [`sniff`]: a
+    /// FIFO or a device cannot be read twice.
+    pub head: Vec<u8>,
+}
+
 /// Decodes the capture at `path` (a file, a FIFO or a device: read as a stream, in chunks, never
-/// held whole) in `format` on `layout`; returns the scans and the number of bytes read.
+/// held whole) in `format` on `layout`; returns the scans, the number of bytes read and the
+/// capture's first bytes.
 ///
 /// # Errors
 /// [`LidarError::Io`], [`LidarError::CaptureTooLarge`] past `max_bytes`,
@@ -206,12 +248,13 @@ pub fn decode_path<const N: usize>(
     config: AssemblerConfig,
     max_bytes: u64,
     max_scans: usize,
-) -> Result<(Decoded, u64), LidarError> {
+) -> Result<Capture, LidarError> {
     use std::io::Read;
     let io = |e| LidarError::Io(path.to_path_buf(), e);
     let mut file = std::fs::File::open(path).map_err(io)?;
     let mut d = StreamDecoder::new(format, layout, config, max_scans)?;
     let mut chunk = vec![0u8; 64 * 1024];
+    let mut head = Vec::new();
     let mut total = 0u64;
     loop {
         let n = match file.read(&mut chunk) {
@@ -224,7 +267,14 @@ pub fn decode_path<const N: usize>(
         if total > max_bytes {
             return Err(LidarError::CaptureTooLarge(path.to_path_buf()));
         }
-        d.feed(chunk.get(..n).unwrap_or(&[]))?;
+        let bytes = chunk.get(..n).unwrap_or(&[]);
+        let keep = SNIFF_BYTES.saturating_sub(head.len()).min(bytes.len());
+        head.extend_from_slice(bytes.get(..keep).unwrap_or(&[]));
+        d.feed(bytes)?;
     }
-    Ok((d.finish()?, total))
+    Ok(Capture {
+        decoded: d.finish()?,
+        bytes: total,
+        head,
+    })
 }

@@ -6,7 +6,9 @@
 pub mod decode;
 pub mod encode;
 
-pub use decode::{decode_path, decode_stream, AnyDecoder, Decoded, StreamDecoder};
+pub use decode::{
+    decode_path, decode_stream, looks_like, sniff, AnyDecoder, Capture, Decoded, StreamDecoder,
+};
 pub use encode::{
     encode_scans, ydlidar_rotor_samples, EncodeReport, StreamOptions, YDLIDAR_MAX_MISS_DEG,
     YDLIDAR_PER_PACKET,
@@ -32,7 +34,9 @@ pub const MAX_GARBAGE_BYTES: usize = 1 << 20;
 /// A sensor protocol.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Format {
-    /// LDROBOT LD06 / LD19 / STL-19P: 47-byte frames with CRC-8, 230,400 baud.
+    /// LDROBOT LD06 / LD19 / STL-19P: 47-byte frames with CRC-8, 230,400 baud (`ld19` is
+    /// accepted for the same protocol).
+    #[value(alias = "ld19")]
     Ld06,
     /// SLAMTEC RPLIDAR standard scan: descriptor then 5-byte nodes, 115,200 baud (A1).
     Rplidar,
@@ -53,6 +57,9 @@ impl Format {
             Self::Ydlidar => "ydlidar",
         }
     }
+
+    /// Every format, in the order they are tried when a stream is sniffed.
+    pub const ALL: [Self; 4] = [Self::Ld06, Self::Rplidar, Self::Xv11, Self::Ydlidar];
 
     /// The largest range the protocol's distance field carries, metres.
     pub fn field_max_m(self) -> f32 {
@@ -97,6 +104,18 @@ pub enum LidarError {
     /// The stream `lidar encode` would write is longer than
     /// [`crate::input::limits::MAX_CAPTURE_BYTES`] (what `lidar decode` reads).
     StreamTooLarge,
+    /// No frame of `format` in the whole capture: the stream is not in that protocol.
+    NotThisFormat {
+        /// The capture.
+        path: PathBuf,
+        /// The protocol asked for (`--format`).
+        format: Format,
+        /// Bytes read.
+        bytes: u64,
+        /// The protocol whose decoder found the most frames in the capture's first
+        /// [`decode::SNIFF_BYTES`] bytes, if any found one.
+        looks_like: Option<Format>,
+    },
 }
 
 impl std::fmt::Display for LidarError {
@@ -121,6 +140,36 @@ impl std::fmt::Display for LidarError {
                  (encode fewer --scans)",
                 crate::input::limits::MAX_CAPTURE_BYTES
             ),
+            Self::NotThisFormat {
+                path,
+                format,
+                bytes,
+                looks_like,
+            } => {
+                let name = format.name();
+                if *bytes == 0 {
+                    return write!(f, "{} is empty: no {name} frame to decode", path.display());
+                }
+                write!(
+                    f,
+                    "{}: no {name} frame in {bytes} bytes: the stream does not look like {name}; ",
+                    path.display()
+                )?;
+                match looks_like {
+                    Some(other) => write!(f, "it looks like {0} (try --format {0})", other.name()),
+                    None => write!(
+                        f,
+                        "no other decoder ({}) finds a frame in its first {} bytes either",
+                        Format::ALL
+                            .iter()
+                            .filter(|o| *o != format)
+                            .map(|o| o.name())
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                        decode::SNIFF_BYTES
+                    ),
+                }
+            }
             Self::TooManyScans => write!(
                 f,
                 "the capture holds more than {} scans, the limit for one decode",

@@ -136,7 +136,11 @@ impl std::fmt::Display for TrackError {
         match self {
             Self::Io(p, e) => write!(f, "{}: {e}", p.display()),
             Self::Read(e) => write!(f, "{e}"),
-            Self::Blob(e) => write!(f, "bad field blob: {e}"),
+            Self::Blob(e) => write!(
+                f,
+                "bad field blob: {e}{}",
+                crate::input::field_file::blob_hint(e)
+            ),
             Self::FreeSpace(e) => write!(f, "bad free-space section: {e}"),
             Self::Log(e) => write!(f, "{e}"),
             Self::Usage(m) => f.write_str(m),

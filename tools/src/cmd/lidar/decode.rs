@@ -1,7 +1,9 @@
 //! `beamfield lidar decode`: a LiDAR byte stream decoded into scans, with the decoder's and
 //! the assembler's counters; optionally one scan drawn as a polar plot.
 
-use crate::lidar_stream::{decode_path, layout, Decoded, Format, LayoutChoice, LidarError};
+use crate::lidar_stream::{
+    decode_path, layout, looks_like, Decoded, Format, LayoutChoice, LidarError,
+};
 use beamfield::lidar::{AssemblerConfig, AssemblerStats, DecoderStats};
 use clap::Args;
 use serde::{Serialize, Serializer};
@@ -93,7 +95,7 @@ pub fn run(a: &DecodeArgs) -> Result<LidarDecodeReport, LidarError> {
         ..AssemblerConfig::for_layout(&layout)
     };
     crate::progress::note(&format!("decoding {} …", a.stream.display()));
-    let (d, bytes) = decode_path(
+    let capture = decode_path(
         &a.stream,
         a.format,
         &layout,
@@ -101,6 +103,17 @@ pub fn run(a: &DecodeArgs) -> Result<LidarDecodeReport, LidarError> {
         crate::input::limits::MAX_CAPTURE_BYTES,
         crate::input::limits::MAX_DECODED_SCANS,
     )?;
+    // Not one frame: the wrong --format (or not a LiDAR stream at all). Said as such, with the
+    // protocol whose decoder does find frames, rather than "0 frames ok" and success.
+    if capture.decoded.decoder.frames_ok == 0 {
+        return Err(LidarError::NotThisFormat {
+            path: a.stream.clone(),
+            format: a.format,
+            bytes: capture.bytes,
+            looks_like: looks_like(&capture.head, a.format),
+        });
+    }
+    let (d, bytes) = (capture.decoded, capture.bytes);
     if let Some(path) = &a.output {
         let k = a.scan.unwrap_or(d.scans.len().saturating_sub(1));
         let ranges = d.scans.get(k).ok_or_else(|| {

@@ -154,6 +154,13 @@ pub enum LogError {
         /// The file.
         path: std::path::PathBuf,
     },
+    /// The file is of another kind (an image, a blob, a ROS 2 bag), not a CARMEN log.
+    NotALog {
+        /// The file.
+        path: PathBuf,
+        /// What it is.
+        kind: crate::input::kind::FileKind,
+    },
     /// The log holds more of something than the reader keeps (scans, PARAM lines, message
     /// types): what, and the limit.
     TooMany(&'static str, usize),
@@ -175,6 +182,16 @@ impl fmt::Display for LogError {
                 path.display(),
                 crate::input::limits::MAX_LOG_BYTES
             ),
+            Self::NotALog { path, kind } => write!(
+                f,
+                "{} is {kind}, not a CARMEN log (a text file of FLASER lines){}",
+                path.display(),
+                if *kind == crate::input::kind::FileKind::Bag {
+                    "; `beamfield track --bag` reads bags"
+                } else {
+                    ""
+                }
+            ),
             Self::TooMany(what, limit) => {
                 write!(
                     f,
@@ -190,7 +207,10 @@ impl std::error::Error for LogError {
         match self {
             Self::Io { source, .. } => Some(source),
             Self::Line(e) => Some(e),
-            Self::BadOption(_) | Self::TooLarge { .. } | Self::TooMany(..) => None,
+            Self::BadOption(_)
+            | Self::TooLarge { .. }
+            | Self::NotALog { .. }
+            | Self::TooMany(..) => None,
         }
     }
 }

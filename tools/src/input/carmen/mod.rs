@@ -201,9 +201,10 @@ impl CarmenLog {
     /// Reads a log file.
     ///
     /// # Errors
-    /// [`LogError::Io`] when the file cannot be read, [`LogError::Line`] for the first malformed
-    /// line (unless [`ReadOptions::skip_bad_lines`]), [`LogError::BadOption`] for a given max
-    /// range that is not finite and positive.
+    /// [`LogError::Io`] when the file cannot be read, [`LogError::NotALog`] for an image, a blob
+    /// or a bag, [`LogError::Line`] for the first malformed line (unless
+    /// [`ReadOptions::skip_bad_lines`]), [`LogError::BadOption`] for a given max range that is
+    /// not finite and positive.
     ///
     /// At most [`crate::input::limits::MAX_LOG_BYTES`] are read: a longer file (or a FIFO or device
     /// that does not end, such as `/dev/zero`) is [`LogError::TooLarge`], whatever its lines.
@@ -216,6 +217,18 @@ impl CarmenLog {
         let mut reader = std::io::BufReader::new(
             file.take(crate::input::limits::MAX_LOG_BYTES.saturating_add(1)),
         );
+        // An image, a blob or a bag given as the log: said as such, not as its first bad line.
+        // Its first bytes are looked at in the reader's buffer (a FIFO is read once).
+        let head = reader.fill_buf().map_err(|source| LogError::Io {
+            path: Some(path.to_path_buf()),
+            source,
+        })?;
+        if let Some(kind) = crate::input::kind::file_kind(head) {
+            return Err(LogError::NotALog {
+                path: path.to_path_buf(),
+                kind,
+            });
+        }
         let read = Self::read(&mut reader, options);
         // More than the limit was there: the file is too large, whatever a cut line says.
         if reader.get_ref().limit() == 0 {

@@ -13,6 +13,13 @@ pub enum MapError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// The file given as the map's YAML is of another kind (its image, a blob).
+    NotYaml {
+        /// The file.
+        path: PathBuf,
+        /// What it is.
+        kind: crate::input::kind::FileKind,
+    },
     /// The YAML is malformed or lacks a required key.
     Yaml {
         /// The YAML file.
@@ -67,6 +74,15 @@ impl fmt::Display for MapError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Io { path, source } => write!(f, "cannot read {}: {source}", path.display()),
+            Self::NotYaml { path, kind } => write!(
+                f,
+                "{} is {kind}; pass the map's YAML (the file that names {})",
+                path.display(),
+                match kind {
+                    crate::input::kind::FileKind::Image => "it",
+                    _ => "the map's image",
+                }
+            ),
             Self::Yaml { path, message } => {
                 write!(f, "malformed map yaml {}: {message}", path.display())
             }

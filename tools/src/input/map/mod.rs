@@ -167,15 +167,29 @@ pub fn load_map_limited(yaml_path: &Path, max_cells: u64) -> Result<OccupancyMap
         let path = path.to_path_buf();
         move |source| MapError::Io { path, source }
     };
-    let mut text = String::new();
+    let mut bytes = Vec::new();
     {
         use std::io::Read;
         std::fs::File::open(yaml_path)
             .map_err(io(yaml_path))?
             .take(MAX_YAML_BYTES + 1)
-            .read_to_string(&mut text)
+            .read_to_end(&mut bytes)
             .map_err(io(yaml_path))?;
     }
+    // The map's image (or a blob) where its YAML goes: said as such, not as a YAML or UTF-8
+    // error about its bytes.
+    if let Some(kind) = crate::input::kind::file_kind(&bytes) {
+        return Err(MapError::NotYaml {
+            path: yaml_path.to_path_buf(),
+            kind,
+        });
+    }
+    let text = String::from_utf8(bytes).map_err(|_| MapError::Yaml {
+        path: yaml_path.to_path_buf(),
+        message: "not UTF-8 text; pass the map's YAML (map_server's: image, resolution, \
+                  origin, thresholds)"
+            .into(),
+    })?;
     if text.len() as u64 > MAX_YAML_BYTES {
         return Err(MapError::Yaml {
             path: yaml_path.to_path_buf(),
