@@ -33,6 +33,7 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         scans,
         unexplained: None,
         resetting: false,
+        adaptive_noise: None,
     }
 }
 

@@ -1,5 +1,6 @@
 //! The localizer's storage, parameters, errors and update report.
 
+use super::adaptive::AdaptiveNoise;
 use super::estimate::Estimate;
 use super::motion::OdometryNoise;
 use super::quality::{QualityReport, QualityThresholds, Resetting};
@@ -95,6 +96,8 @@ pub struct MclConfig {
     /// (metres; `+∞` is off) and the largest share removed.
     pub(super) unexplained_distance_m: f32,
     pub(super) unexplained_max_share: f32,
+    /// The adaptive motion noise; None: off.
+    pub(super) adaptive_noise: Option<AdaptiveNoise>,
 }
 
 impl MclConfig {
@@ -136,6 +139,7 @@ impl MclConfig {
             resetting: None,
             unexplained_distance_m: f32::INFINITY,
             unexplained_max_share: 0.0,
+            adaptive_noise: None,
         })
     }
 
@@ -199,6 +203,28 @@ impl MclConfig {
             distance_m: self.unexplained_distance_m,
             max_share: self.unexplained_max_share,
         })
+    }
+
+    /// Turns on the adaptive motion noise ([`AdaptiveNoise`], [`super::adaptive`]; off by
+    /// default, `None` turns it off): the odometry variances are scaled at every update after a
+    /// motion so that the scan's correction of the predicted cloud matches the cloud's own
+    /// spread ([`Mcl::noise_scale`](super::Mcl::noise_scale) is the scale in use).
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`AdaptiveNoise::validate`] refuses the values.
+    pub fn with_adaptive_noise(self, adaptive: Option<AdaptiveNoise>) -> Result<Self, MclError> {
+        if adaptive.is_some_and(|a| !a.validate()) {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self {
+            adaptive_noise: adaptive,
+            ..self
+        })
+    }
+
+    /// The adaptive motion noise, when on ([`MclConfig::with_adaptive_noise`]).
+    pub fn adaptive_noise(&self) -> Option<&AdaptiveNoise> {
+        self.adaptive_noise.as_ref()
     }
 
     /// The resetting, when on ([`MclConfig::with_resetting`]).

@@ -132,6 +132,13 @@ pub struct TrackArgs {
     /// updates. Needs a field built with --free-space.
     #[arg(long)]
     pub resetting: bool,
+    /// The adaptive motion noise (off by default; MclConfig::with_adaptive_noise,
+    /// docs/localization.md): the odometry variances scaled at every update so that the
+    /// scan's correction of the predicted cloud matches its spread. "TARGET,RATE,MIN,MAX" (the
+    /// squared Mahalanobis correction steered to, the rate, the variance scale's bounds), or no
+    /// value for the defaults "3,0.1,0.25,16".
+    #[arg(long, num_args = 0..=1, default_missing_value = "3,0.1,0.25,16", value_name = "T,R,MIN,MAX")]
+    pub adaptive_noise: Option<String>,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -184,7 +191,15 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         }
         None => None,
     };
+    let adaptive_noise = match &args.adaptive_noise {
+        Some(text) => {
+            let v = parse_list(text, "--adaptive-noise", 4)?;
+            Some([v[0], v[1], v[2], v[3]])
+        }
+        None => None,
+    };
     Ok(RunOptions {
+        adaptive_noise,
         particles: args.particles,
         kappa: args.kappa,
         stride: args.stride,
@@ -348,6 +363,10 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
             resamplings: r.resamplings,
             injected: r.injected,
             retries: r.retries,
+            noise_scale_mean_max: [
+                r.noise_scales.iter().sum::<f32>() / r.noise_scales.len().max(1) as f32,
+                r.noise_scales.iter().copied().fold(0.0, f32::max),
+            ],
         })
         .collect();
     Ok(TrackReport {
@@ -363,6 +382,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         resetting: o.resetting,
         retry: o.retry.map(|(d, k)| [d, k]),
         kidnap: o.kidnap,
+        adaptive_noise: o.adaptive_noise,
         runs: per,
         trans_rmse_cm_min_med_max: rmse,
         heading_rmse_deg_min_med_max: head,
