@@ -34,6 +34,7 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         unexplained: None,
         resetting: false,
         adaptive_noise: None,
+        kld: None,
     }
 }
 

@@ -104,46 +104,45 @@ impl Prior {
     /// equal, `weights` unread). None for an empty set or a zero total.
     pub(super) fn of(poses: &[Pose], weights: &[f32], uniform: bool) -> Option<Self> {
         let origin = *poses.first()?;
-        let mut s = [0.0f32; 10];
+        // Σw, Σw·d and Σw·d·dᵀ (upper triangle) of the deviations d from the first pose.
+        let (mut w0, mut sx, mut sy, mut st) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        let (mut xx, mut xy, mut xt, mut yy, mut yt, mut tt) = (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
         let mut add = |w: f32, p: &Pose| {
-            let d = [
-                p.x_m - origin.x_m,
-                p.y_m - origin.y_m,
-                crate::pose::wrap_angle(p.theta_rad - origin.theta_rad),
-            ];
-            let [a, b, c] = d;
-            s[0] += w;
-            s[1] += w * a;
-            s[2] += w * b;
-            s[3] += w * c;
-            s[4] += w * a * a;
-            s[5] += w * a * b;
-            s[6] += w * a * c;
-            s[7] += w * b * b;
-            s[8] += w * b * c;
-            s[9] += w * c * c;
+            let a = p.x_m - origin.x_m;
+            let b = p.y_m - origin.y_m;
+            let c = crate::pose::wrap_angle(p.theta_rad - origin.theta_rad);
+            w0 += w;
+            sx += w * a;
+            sy += w * b;
+            st += w * c;
+            xx += w * a * a;
+            xy += w * a * b;
+            xt += w * a * c;
+            yy += w * b * b;
+            yt += w * b * c;
+            tt += w * c * c;
         };
         if uniform {
             poses.iter().for_each(|p| add(1.0, p));
         } else {
             poses.iter().zip(weights).for_each(|(p, &w)| add(w, p));
         }
-        if !(s[0] > 0.0) {
+        if w0.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
             return None;
         }
-        let inv = 1.0 / s[0];
-        let m = [s[1] * inv, s[2] * inv, s[3] * inv];
-        let c = |k: usize, i: usize, j: usize| s[k] * inv - m[i] * m[j];
+        let inv = 1.0 / w0;
+        let (mx, my, mt) = (sx * inv, sy * inv, st * inv);
+        let (cxy, cxt, cyt) = (xy * inv - mx * my, xt * inv - mx * mt, yt * inv - my * mt);
         let covariance = [
-            [c(4, 0, 0), c(5, 0, 1), c(6, 0, 2)],
-            [c(5, 0, 1), c(7, 1, 1), c(8, 1, 2)],
-            [c(6, 0, 2), c(8, 1, 2), c(9, 2, 2)],
+            [xx * inv - mx * mx, cxy, cxt],
+            [cxy, yy * inv - my * my, cyt],
+            [cxt, cyt, tt * inv - mt * mt],
         ];
         Some(Self {
             mean: Pose::new(
-                origin.x_m + m[0],
-                origin.y_m + m[1],
-                crate::pose::wrap_angle(origin.theta_rad + m[2]),
+                origin.x_m + mx,
+                origin.y_m + my,
+                crate::pose::wrap_angle(origin.theta_rad + mt),
             ),
             covariance,
         })
@@ -158,32 +157,36 @@ impl Prior {
             posterior.y_m - self.mean.y_m,
             crate::pose::wrap_angle(posterior.theta_rad - self.mean.theta_rad),
         ];
-        let mut a = self.covariance;
-        a[0][0] += PRIOR_FLOOR_M2;
-        a[1][1] += PRIOR_FLOOR_M2;
-        a[2][2] += PRIOR_FLOOR_RAD2;
-        // Cholesky, a = L Lᵀ; ν = |L⁻¹ d|².
-        let l00 = a[0][0];
-        if !(l00 > 0.0) {
+        let [[c00, c01, c02], [c10, c11, c12], [c20, c21, c22]] = self.covariance;
+        let a = [
+            [c00 + PRIOR_FLOOR_M2, c01, c02],
+            [c10, c11 + PRIOR_FLOOR_M2, c12],
+            [c20, c21, c22 + PRIOR_FLOOR_RAD2],
+        ];
+        // Cholesky, a = L Lᵀ; ν = |L⁻¹ d|². A pivot that is not positive (or NaN) fails.
+        let positive = |v: f32| v.partial_cmp(&0.0) == Some(core::cmp::Ordering::Greater);
+        let [[a00, _, _], [a10, a11, _], [a20, a21, a22]] = a;
+        let [d0, d1, d2] = d;
+        if !positive(a00) {
             return f32::NAN;
         }
-        let l00 = crate::math::sqrt(l00);
-        let l10 = a[1][0] / l00;
-        let l20 = a[2][0] / l00;
-        let q11 = a[1][1] - l10 * l10;
-        if !(q11 > 0.0) {
+        let l00 = crate::math::sqrt(a00);
+        let l10 = a10 / l00;
+        let l20 = a20 / l00;
+        let q11 = a11 - l10 * l10;
+        if !positive(q11) {
             return f32::NAN;
         }
         let l11 = crate::math::sqrt(q11);
-        let l21 = (a[2][1] - l20 * l10) / l11;
-        let q22 = a[2][2] - l20 * l20 - l21 * l21;
-        if !(q22 > 0.0) {
+        let l21 = (a21 - l20 * l10) / l11;
+        let q22 = a22 - l20 * l20 - l21 * l21;
+        if !positive(q22) {
             return f32::NAN;
         }
         let l22 = crate::math::sqrt(q22);
-        let y0 = d[0] / l00;
-        let y1 = (d[1] - l10 * y0) / l11;
-        let y2 = (d[2] - l20 * y0 - l21 * y1) / l22;
+        let y0 = d0 / l00;
+        let y1 = (d1 - l10 * y0) / l11;
+        let y2 = (d2 - l20 * y0 - l21 * y1) / l22;
         y0 * y0 + y1 * y1 + y2 * y2
     }
 }

@@ -2,6 +2,7 @@
 
 use super::adaptive::AdaptiveNoise;
 use super::estimate::Estimate;
+use super::kld::Kld;
 use super::motion::OdometryNoise;
 use super::quality::{QualityReport, QualityThresholds, Resetting};
 use super::unexplained::Unexplained;
@@ -98,6 +99,8 @@ pub struct MclConfig {
     pub(super) unexplained_max_share: f32,
     /// The adaptive motion noise; None: off.
     pub(super) adaptive_noise: Option<AdaptiveNoise>,
+    /// KLD sampling; None: off (the count in use is the initialization's).
+    pub(super) kld: Option<Kld>,
 }
 
 impl MclConfig {
@@ -140,6 +143,7 @@ impl MclConfig {
             unexplained_distance_m: f32::INFINITY,
             unexplained_max_share: 0.0,
             adaptive_noise: None,
+            kld: None,
         })
     }
 
@@ -220,6 +224,25 @@ impl MclConfig {
             adaptive_noise: adaptive,
             ..self
         })
+    }
+
+    /// Turns on KLD sampling ([`Kld`], [`super::kld`]; off by default, `None` turns it off):
+    /// the number of particles in use is chosen at each resampling (by the weights, not at the
+    /// resamplings of a retry, an expansion or a reset), between [`Kld::min`] and
+    /// [`Kld::max`] and at most the capacity.
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`Kld::validate`] refuses the values.
+    pub fn with_kld(self, kld: Option<Kld>) -> Result<Self, MclError> {
+        if kld.is_some_and(|k| !k.validate()) {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self { kld, ..self })
+    }
+
+    /// KLD sampling, when on ([`MclConfig::with_kld`]).
+    pub fn kld(&self) -> Option<&Kld> {
+        self.kld.as_ref()
     }
 
     /// The adaptive motion noise, when on ([`MclConfig::with_adaptive_noise`]).

@@ -4,6 +4,7 @@
 use super::adaptive::Prior;
 use super::config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
 use super::estimate::{Estimate, Moments};
+use super::kld::BinCount;
 use super::motion::{sample_words, OdometryStep};
 use super::quality::{Quality, QualityReport, QualityState};
 use super::resample::{apply_counts, low_variance_counts_of_total};
@@ -665,7 +666,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
         };
         let due = self.resampling_due(rw.estimate.ess, rw.impossible) || m > 0;
         let mut injected = 0u16;
-        if due {
+        if due && self.config.kld.is_some() {
+            injected = self.resample_kld(m, rw.sum, free, rng);
+        } else if due {
             injected = self.resample(m, rw.sum, free, rng);
         } else {
             let inv = 1.0 / rw.sum;
@@ -899,6 +902,79 @@ impl<'p, const N: usize> Mcl<'p, N> {
         }
         self.reset_weights_only();
         taken
+    }
+
+    /// KLD sampling ([`MclConfig::with_kld`]): the new count `n'` from the bins of the
+    /// particles the resampling would draw at the largest count (weight at least half of
+    /// `total/max`), then low-variance resampling of `n' − m` particles and `m` random ones
+    /// from `free` (`m` at most `n'`), in place; `self.len` becomes `n'` (`n' − m` without a
+    /// free space).
+    fn resample_kld<R: Rng + ?Sized>(
+        &mut self,
+        m: usize,
+        total: f32,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> u16 {
+        let Some(k) = self.config.kld else {
+            return self.resample(m, total, free, rng);
+        };
+        let n = self.len;
+        let hi = usize::from(k.max).min(N);
+        let mut bins = BinCount::new(&k);
+        let at_least = 0.5 * total / hi as f32;
+        for (p, &w) in self.store.poses.iter().zip(&self.store.weights).take(n) {
+            if w >= at_least {
+                bins.add(p);
+            }
+        }
+        let target = k.count(bins.bins(), N);
+        let m = if free.is_some() { m.min(target) } else { 0 };
+        let draws = u16::try_from(target - m).unwrap_or(u16::MAX);
+        let slots = n.max(target);
+        let store = &mut *self.store;
+        let (weights, counts, poses) = (
+            store.weights.get(..n).unwrap_or(&[]),
+            store.counts.get_mut(..slots).unwrap_or(&mut []),
+            store.poses.get_mut(..slots).unwrap_or(&mut []),
+        );
+        counts.iter_mut().skip(n).for_each(|c| *c = 0);
+        low_variance_counts_of_total(
+            weights,
+            total,
+            counts.get_mut(..n).unwrap_or(&mut []),
+            draws,
+            rng,
+        );
+        apply_counts(poses, counts);
+        let mut injected = 0u16;
+        if let Some(free) = free {
+            for (p, c) in poses.iter_mut().zip(counts.iter_mut()) {
+                if usize::from(injected) >= m {
+                    break;
+                }
+                if *c == 0 {
+                    *p = free.sample_pose(rng);
+                    *c = 1;
+                    injected = injected.saturating_add(1);
+                }
+            }
+        }
+        // The filled slots to the front, in order.
+        let mut kept = 0usize;
+        for i in 0..slots {
+            if counts.get(i).copied().unwrap_or(0) != 0 {
+                if let Some(p) = poses.get(i).copied() {
+                    if let Some(q) = poses.get_mut(kept) {
+                        *q = p;
+                    }
+                }
+                kept += 1;
+            }
+        }
+        self.len = kept.max(1);
+        self.reset_weights_only();
+        injected
     }
 
     /// Low-variance resampling of `n − m` particles and `m` random ones from `free`, in place.
@@ -1217,6 +1293,68 @@ mod tests {
                 .err(),
             Some(MclError::BadConfig)
         );
+    }
+
+    #[test]
+    fn kld_count_grows_with_the_spread_and_shrinks_back() {
+        use crate::mcl::Kld;
+        let kld = Kld {
+            min: 100,
+            max: 2000,
+            ..Kld::NAV2
+        };
+        // Wide motion noise: σ_trans ≈ 0.7 m per 1 m step.
+        let config = MclConfig::new(OdometryNoise::uniform(0.5).unwrap(), 1.0, 0.0, 0.0)
+            .unwrap()
+            .with_kld(Some(kld))
+            .unwrap();
+        let mut store = Particles::<3000>::new();
+        let mut f = Mcl::new(&mut store, config).unwrap();
+        let mut rng = SplitMix64::new(9);
+        f.init_gaussian(100, &Pose::default(), 0.02, 0.01, &mut rng)
+            .unwrap();
+        let step = OdometryStep::new(0.0, 1.0, 0.0).unwrap();
+        let mut counts = Vec::new();
+        // Ten steps scored by an almost flat likelihood: the cloud spreads over many bins.
+        for _ in 0..10 {
+            f.predict(&step, &mut rng);
+            let up = f
+                .update_with(|p| 0.01 * (37.0 * p.x_m).sin(), None, &mut rng)
+                .unwrap();
+            assert!(up.resampled);
+            counts.push(f.len());
+        }
+        // Then a sharp one (5 cm) around a pose in the cloud: it collapses.
+        let at = f.estimate().pose;
+        for _ in 0..5 {
+            f.update_with(
+                |p| -((p.x_m - at.x_m).powi(2) + (p.y_m - at.y_m).powi(2)) / (2.0 * 0.05 * 0.05),
+                None,
+                &mut rng,
+            )
+            .unwrap();
+            counts.push(f.len());
+        }
+        assert!(
+            counts.iter().all(|&n| (100..=2000).contains(&n)),
+            "{counts:?}"
+        );
+        assert_eq!(counts[..10].iter().max(), Some(&2000), "{counts:?}");
+        assert_eq!(*counts.last().unwrap(), 100, "{counts:?}");
+        assert_eq!(f.weights().len(), f.len());
+        assert!(f.poses().iter().all(Pose::is_finite));
+        // A capacity below max: never more than the capacity.
+        let mut small = Particles::<500>::new();
+        let mut g = Mcl::new(&mut small, config).unwrap();
+        g.init_gaussian(100, &Pose::default(), 0.02, 0.01, &mut rng)
+            .unwrap();
+        for _ in 0..10 {
+            g.predict(&step, &mut rng);
+            g.update_with(|p| 0.01 * (37.0 * p.x_m).sin(), None, &mut rng)
+                .unwrap();
+            assert!(g.len() <= 500);
+        }
+        assert_eq!(g.len(), 500);
     }
 
     #[test]

@@ -18,6 +18,7 @@
 //!   expansion resetting, free-space resetting, the settle guard).
 //! - [`adaptive`]: the odometry noise scaled by the scans' corrections ([`AdaptiveNoise`],
 //!   opt-in).
+//! - [`kld`]: KLD sampling ([`Kld`], opt-in): the particle count adapts inside the capacity.
 //! - [`unexplained`]: readings the map cannot explain ([`Unexplained`]), left out of an
 //!   update (opt-in).
 //! - [`rng`]: [`SplitMix64`] (the filter's) and [`XorShift64`] (the randomized checks'), seeded
@@ -33,6 +34,7 @@ pub mod adaptive;
 pub mod config;
 pub mod estimate;
 pub mod filter;
+pub mod kld;
 pub mod motion;
 pub mod normal;
 pub mod odometry;
@@ -47,6 +49,7 @@ pub use config::{
 };
 pub use estimate::{diagonal_variances, Estimate};
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
+pub use kld::Kld;
 pub use motion::{
     MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M, MAX_ALPHA, MAX_STEP_M,
     MAX_STEP_ROTATION_RAD,

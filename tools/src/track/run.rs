@@ -3,8 +3,8 @@
 use crate::cmd::scored_log::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::mcl::{
-    AdaptiveNoise, Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, Resetting,
-    SplitMix64, Unexplained,
+    AdaptiveNoise, Kld, Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles,
+    Resetting, SplitMix64, Unexplained,
 };
 use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, Tempered};
 use std::io::IsTerminal;
@@ -54,6 +54,9 @@ pub struct RunOptions {
     /// The adaptive motion noise (target, rate, smallest and largest variance scale,
     /// `MclConfig::with_adaptive_noise`); None: off.
     pub adaptive_noise: Option<[f32; 4]>,
+    /// KLD sampling between these particle counts (nav2's `pf_err` 0.05, `pf_z` 0.99, bins
+    /// 0.5 m and 10°; `MclConfig::with_kld`), starting from `particles`; None: a fixed count.
+    pub kld: Option<(u16, u16)>,
 }
 
 /// The outcome of one run.
@@ -76,6 +79,8 @@ pub struct RunResult {
     /// The odometry noise's variance scale after each scan (`Mcl::noise_scale`; 1 without the
     /// adaptive motion noise).
     pub noise_scales: Vec<f32>,
+    /// The particles in use after each scan.
+    pub particles_in_use: Vec<usize>,
 }
 
 /// Summary figures of a run.
@@ -237,7 +242,13 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
                     max_scale,
                 }),
         )
-        .map_err(|e| usage(format!("--adaptive-noise: {e}")))?;
+        .map_err(|e| usage(format!("--adaptive-noise: {e}")))?
+        .with_kld(o.kld.map(|(min, max)| Kld {
+            min,
+            max,
+            ..Kld::NAV2
+        }))
+        .map_err(|e| usage(format!("--kld: {e}")))?;
     let lf = LikelihoodField::new(view, input.params);
     let model = Tempered::new(lf, o.kappa, o.stride)
         .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;
@@ -267,6 +278,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         injected: 0,
         retries: 0,
         noise_scales: Vec::with_capacity(n),
+        particles_in_use: Vec::with_capacity(n),
     };
     let progress = std::io::stderr().is_terminal();
     let odom = match &input.odometry {
@@ -336,6 +348,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         let dy = f64::from(est.y_m - truth.y_m);
         out.estimates.push(est);
         out.noise_scales.push(mcl.noise_scale());
+        out.particles_in_use.push(mcl.len());
         out.trans_err_m.push(dx.hypot(dy));
         out.heading_err_deg.push(
             f64::from(wrap_angle(est.theta_rad - truth.theta_rad))

@@ -139,6 +139,11 @@ pub struct TrackArgs {
     /// value for the defaults "3,0.1,0.25,16".
     #[arg(long, num_args = 0..=1, default_missing_value = "3,0.1,0.25,16", value_name = "T,R,MIN,MAX")]
     pub adaptive_noise: Option<String>,
+    /// KLD sampling "MIN,MAX" (off by default; MclConfig::with_kld with nav2's pf_err 0.05,
+    /// pf_z 0.99 and 0.5 m / 10° bins): the particles in use adapt at each resampling between
+    /// MIN and MAX, starting from --particles.
+    #[arg(long, value_name = "MIN,MAX")]
+    pub kld: Option<String>,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -198,8 +203,25 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         }
         None => None,
     };
+    let kld = match &args.kld {
+        Some(text) => {
+            let v = parse_list(text, "--kld", 2)?;
+            let count = |x: f32| {
+                (x >= 1.0 && x <= MAX_TRACK_PARTICLES as f32 && x.fract() == 0.0)
+                    .then_some(x as u16)
+                    .ok_or_else(|| {
+                        usage(format!(
+                            "--kld {text:?}: counts in 1..={MAX_TRACK_PARTICLES}"
+                        ))
+                    })
+            };
+            Some((count(v[0])?, count(v[1])?))
+        }
+        None => None,
+    };
     Ok(RunOptions {
         adaptive_noise,
+        kld,
         particles: args.particles,
         kappa: args.kappa,
         stride: args.stride,
@@ -363,6 +385,11 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
             resamplings: r.resamplings,
             injected: r.injected,
             retries: r.retries,
+            particles_mean_max: [
+                r.particles_in_use.iter().sum::<usize>() as f32
+                    / r.particles_in_use.len().max(1) as f32,
+                r.particles_in_use.iter().copied().max().unwrap_or(0) as f32,
+            ],
             noise_scale_mean_max: [
                 r.noise_scales.iter().sum::<f32>() / r.noise_scales.len().max(1) as f32,
                 r.noise_scales.iter().copied().fold(0.0, f32::max),
@@ -383,6 +410,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         retry: o.retry.map(|(d, k)| [d, k]),
         kidnap: o.kidnap,
         adaptive_noise: o.adaptive_noise,
+        kld: o.kld.map(|(a, b)| [a, b]),
         runs: per,
         trans_rmse_cm_min_med_max: rmse,
         heading_rmse_deg_min_med_max: head,

@@ -22,6 +22,8 @@ pub struct SeedRun {
     /// The odometry noise's variance scale (1 without `--adaptive-noise`): mean and largest
     /// over the scans.
     pub noise_scale_mean_max: [f32; 2],
+    /// The particles in use: mean and largest over the scans.
+    pub particles_mean_max: [f32; 2],
 }
 
 /// What `beamfield track` found over its seeds.
@@ -53,6 +55,8 @@ pub struct TrackReport {
     pub kidnap: Option<usize>,
     /// The adaptive motion noise (target, rate, smallest and largest scale), when on.
     pub adaptive_noise: Option<[f32; 4]>,
+    /// KLD sampling's fewest and most particles, when on.
+    pub kld: Option<[u16; 2]>,
     /// Every seed's run.
     pub runs: Vec<SeedRun>,
     /// Translation RMSE over the seeds, cm: min, median, max.
@@ -124,6 +128,12 @@ impl fmt::Display for TrackReport {
                 .map(|k| format!(", kidnapped at scan {k}"))
                 .unwrap_or_default()
         )?;
+        if let Some((lo, hi)) = o.kld {
+            writeln!(
+                f,
+                "KLD sampling: {lo} ..= {hi} particles (pf_err 0.05, pf_z 0.99, bins 0.5 m / 10°)"
+            )?;
+        }
         if let Some([t, r, lo, hi]) = o.adaptive_noise {
             writeln!(
                 f,
@@ -182,6 +192,11 @@ impl fmt::Display for TrackReport {
                 if o.adaptive_noise.is_some() {
                     let [mean, max] = r.noise_scale_mean_max;
                     format!("; noise scale mean {mean:.2}, max {max:.2}")
+                } else {
+                    String::new()
+                } + &if o.kld.is_some() {
+                    let [mean, max] = r.particles_mean_max;
+                    format!("; particles mean {mean:.0}, max {max:.0}")
                 } else {
                     String::new()
                 },
