@@ -1063,10 +1063,11 @@ mod tests {
     fn eighteen_bytes_per_particle() {
         assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
         let fixed = core::mem::size_of::<Mcl<'_, 1000>>();
-        // 312 on a 64-bit host: the quality signal's averages (the slow average of the
-        // explained share included), the recovery's counters, the adaptive motion noise's
-        // parameters and scale, the reset in progress; nothing per particle.
-        assert!(fixed <= 312, "{fixed}");
+        // 336 on a 64-bit host: the quality signal's averages (the slow average of the
+        // explained share included), the recovery's counters, the adaptive motion noise's and
+        // KLD sampling's parameters, the noise scale, the reset in progress; nothing per
+        // particle.
+        assert!(fixed <= 336, "{fixed}");
         println!("Mcl: {fixed} bytes besides the particles");
     }
 

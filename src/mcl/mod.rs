@@ -25,7 +25,7 @@
 //!   generators the host and the device run identically.
 //!
 //! Memory: 18 bytes per particle of capacity (pose 12, weight 4, resampling count 2) in
-//! [`Particles`], plus a fixed 312 bytes (on a 64-bit host; less on a 32-bit target) in [`Mcl`]
+//! [`Particles`], plus a fixed 336 bytes (on a 64-bit host; less on a 32-bit target) in [`Mcl`]
 //! (the configuration, the recovery and quality
 //! averages, the last estimate and quality report). See `docs/localization.md` for the
 //! measurements on the Intel lab log.
