@@ -39,13 +39,16 @@ pub struct AdaptiveNoise {
 }
 
 impl AdaptiveNoise {
-    /// The defaults: target 3, rate 0.1, the variances between a quarter and 16 times the
-    /// configured ones (the standard deviations between half and 4 times).
+    /// The defaults: target 1, rate 0.3, the variances between a quarter and 4 times the
+    /// configured ones (the standard deviations between half and twice). Chosen on two logs
+    /// (docs/localization.md, "Adaptive motion noise"): a larger bound (16, 64) widens the
+    /// proposal so far under systematic wheel errors that the filter is lost where the
+    /// fixed model is not; target 3 (the consistent value) reacts too little.
     pub const DEFAULT: Self = Self {
-        target: 3.0,
-        rate: 0.1,
+        target: 1.0,
+        rate: 0.3,
         min_scale: 0.25,
-        max_scale: 16.0,
+        max_scale: 4.0,
     };
 
     /// True when every value is in range: `target` finite and positive, `rate` in `(0, 1]`,

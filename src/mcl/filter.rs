@@ -1271,22 +1271,24 @@ mod tests {
         // Off: the scale never moves.
         let (off, _) = wander(base, 0.08);
         assert!(off.iter().all(|&q| q == 1.0));
-        // Odometry 8 cm off per step, five times the model's σ: the scale grows (the variance
-        // needs about 25×; bounded by 16) and the filter keeps up.
+        // Odometry 8 cm off per step, five times the model's σ: the scale grows to its bound
+        // (the variance would need about 25×; the default bound is 4) and the filter keeps up.
         let (bad, err) = wander(on, 0.08);
         assert!(bad
             .iter()
             .all(|&q| (a.min_scale..=a.max_scale).contains(&q)));
         let late = bad[40..].iter().sum::<f32>() / 20.0;
-        assert!(late > 6.0, "{bad:?}");
+        assert!(late > 0.9 * a.max_scale, "{bad:?}");
         assert!(err < 0.1, "{err}");
-        // Exact odometry with a model 20× too wide (α 0.02): the scale shrinks to its floor.
+        // Exact odometry with a model 20× too wide (α 0.02): the scale shrinks (on average
+        // well below 1; the floor is 0.25).
         let wide = MclConfig::new(OdometryNoise::uniform(0.02).unwrap(), 0.5, 0.0, 0.0)
             .unwrap()
             .with_adaptive_noise(Some(a))
             .unwrap();
         let (good, err) = wander(wide, 0.0);
-        assert!(good[50..].iter().all(|&q| q < 0.5), "{good:?}");
+        let late = good[20..].iter().sum::<f32>() / 40.0;
+        assert!(late < 0.75, "{good:?}");
         assert!(err < 0.05, "{err}");
         // Refused values.
         assert_eq!(

@@ -136,8 +136,8 @@ pub struct TrackArgs {
     /// docs/localization.md): the odometry variances scaled at every update so that the
     /// scan's correction of the predicted cloud matches its spread. "TARGET,RATE,MIN,MAX" (the
     /// squared Mahalanobis correction steered to, the rate, the variance scale's bounds), or no
-    /// value for the defaults "3,0.1,0.25,16".
-    #[arg(long, num_args = 0..=1, default_missing_value = "3,0.1,0.25,16", value_name = "T,R,MIN,MAX")]
+    /// value for the defaults "1,0.3,0.25,4" (AdaptiveNoise::DEFAULT).
+    #[arg(long, num_args = 0..=1, default_missing_value = "1,0.3,0.25,4", value_name = "T,R,MIN,MAX")]
     pub adaptive_noise: Option<String>,
     /// KLD sampling "MIN,MAX" (off by default; MclConfig::with_kld with nav2's pf_err 0.05,
     /// pf_z 0.99 and 0.5 m / 10° bins): the particles in use adapt at each resampling between
