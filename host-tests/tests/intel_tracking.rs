@@ -35,6 +35,7 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         resetting: false,
         adaptive_noise: None,
         kld: None,
+        reset_per_update: 0,
     }
 }
 

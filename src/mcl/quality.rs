@@ -348,8 +348,10 @@ pub struct Resetting {
 impl Resetting {
     /// The defaults: expand below 0.4 explained, σ 0.1 m and 0.05 rad doubling up to 8 times
     /// as much (0.8 m, 0.4 rad), a free-space reset of the whole set after 2 updates in a row
-    /// reported `Lost`, the best of 100 candidates for each particle it replaces, scored 1,000
-    /// per update, the settle guard after 20 updates of `Tracking`.
+    /// reported `Lost`, the best of 100 candidates for each particle it replaces, all scored at
+    /// the update that starts the reset (`candidates_per_update` 0: spreading them over
+    /// updates bounds the cost of an update but slows the recovery from a kidnapping, see
+    /// `docs/localization.md`), the settle guard after 20 updates of `Tracking`.
     pub const DEFAULT: Self = Self {
         expand_below: 0.4,
         sigma_m: 0.1,
@@ -358,7 +360,7 @@ impl Resetting {
         reset_after: 2,
         reset_fraction: 1.0,
         reset_candidates: 100,
-        candidates_per_update: 1_000,
+        candidates_per_update: 0,
         settled_after: 20,
     };
 

@@ -51,6 +51,9 @@ pub struct RunOptions {
     /// Expansion and free-space resetting and the settle guard driven by the quality signal
     /// (`MclConfig::with_resetting(Some(Resetting::DEFAULT))`); needs the free space.
     pub resetting: bool,
+    /// With `resetting`: the most free-space candidates scored per update
+    /// (`Resetting::candidates_per_update`; 0 scores all at the update that starts the reset).
+    pub reset_per_update: u32,
     /// The adaptive motion noise (target, rate, smallest and largest variance scale,
     /// `MclConfig::with_adaptive_noise`); None: off.
     pub adaptive_noise: Option<[f32; 4]>,
@@ -231,7 +234,10 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             max_share,
         }))
         .map_err(|e| usage(format!("--unexplained: {e}")))?
-        .with_resetting(o.resetting.then_some(Resetting::DEFAULT))
+        .with_resetting(o.resetting.then_some(Resetting {
+            candidates_per_update: o.reset_per_update,
+            ..Resetting::DEFAULT
+        }))
         .map_err(|e| usage(format!("--resetting: {e}")))?
         .with_adaptive_noise(
             o.adaptive_noise

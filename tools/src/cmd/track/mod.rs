@@ -139,6 +139,11 @@ pub struct TrackArgs {
     /// value for the defaults "1,0.3,0.25,4" (AdaptiveNoise::DEFAULT).
     #[arg(long, num_args = 0..=1, default_missing_value = "1,0.3,0.25,4", value_name = "T,R,MIN,MAX")]
     pub adaptive_noise: Option<String>,
+    /// With --resetting: the most free-space candidates scored per update (0, the default:
+    /// all 100 × particles at the update that starts the reset; N spreads them over updates,
+    /// N each, Resetting::candidates_per_update).
+    #[arg(long, default_value_t = 0, value_name = "N", requires = "resetting")]
+    pub reset_per_update: u32,
     /// KLD sampling "MIN,MAX" (off by default; MclConfig::with_kld with nav2's pf_err 0.05,
     /// pf_z 0.99 and 0.5 m / 10° bins): the particles in use adapt at each resampling between
     /// MIN and MAX, starting from --particles.
@@ -220,6 +225,7 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         None => None,
     };
     Ok(RunOptions {
+        reset_per_update: args.reset_per_update,
         adaptive_noise,
         kld,
         particles: args.particles,
