@@ -33,6 +33,9 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         scans,
         unexplained: None,
         resetting: false,
+        adaptive_noise: None,
+        kld: None,
+        reset_per_update: 0,
     }
 }
 

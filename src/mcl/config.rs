@@ -1,6 +1,8 @@
 //! The localizer's storage, parameters, errors and update report.
 
+use super::adaptive::AdaptiveNoise;
 use super::estimate::Estimate;
+use super::kld::Kld;
 use super::motion::OdometryNoise;
 use super::quality::{QualityReport, QualityThresholds, Resetting};
 use super::unexplained::Unexplained;
@@ -95,6 +97,10 @@ pub struct MclConfig {
     /// (metres; `+∞` is off) and the largest share removed.
     pub(super) unexplained_distance_m: f32,
     pub(super) unexplained_max_share: f32,
+    /// The adaptive motion noise; None: off.
+    pub(super) adaptive_noise: Option<AdaptiveNoise>,
+    /// KLD sampling; None: off (the count in use is the initialization's).
+    pub(super) kld: Option<Kld>,
 }
 
 impl MclConfig {
@@ -136,6 +142,8 @@ impl MclConfig {
             resetting: None,
             unexplained_distance_m: f32::INFINITY,
             unexplained_max_share: 0.0,
+            adaptive_noise: None,
+            kld: None,
         })
     }
 
@@ -199,6 +207,47 @@ impl MclConfig {
             distance_m: self.unexplained_distance_m,
             max_share: self.unexplained_max_share,
         })
+    }
+
+    /// Turns on the adaptive motion noise ([`AdaptiveNoise`], [`super::adaptive`]; off by
+    /// default, `None` turns it off): the odometry variances are scaled at every update after a
+    /// motion so that the scan's correction of the predicted cloud matches the cloud's own
+    /// spread ([`Mcl::noise_scale`](super::Mcl::noise_scale) is the scale in use).
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`AdaptiveNoise::validate`] refuses the values.
+    pub fn with_adaptive_noise(self, adaptive: Option<AdaptiveNoise>) -> Result<Self, MclError> {
+        if adaptive.is_some_and(|a| !a.validate()) {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self {
+            adaptive_noise: adaptive,
+            ..self
+        })
+    }
+
+    /// Turns on KLD sampling ([`Kld`], [`super::kld`]; off by default, `None` turns it off):
+    /// the number of particles in use is chosen at each resampling (by the weights, not at the
+    /// resamplings of a retry, an expansion or a reset), between [`Kld::min`] and
+    /// [`Kld::max`] and at most the capacity.
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`Kld::validate`] refuses the values.
+    pub fn with_kld(self, kld: Option<Kld>) -> Result<Self, MclError> {
+        if kld.is_some_and(|k| !k.validate()) {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self { kld, ..self })
+    }
+
+    /// KLD sampling, when on ([`MclConfig::with_kld`]).
+    pub fn kld(&self) -> Option<&Kld> {
+        self.kld.as_ref()
+    }
+
+    /// The adaptive motion noise, when on ([`MclConfig::with_adaptive_noise`]).
+    pub fn adaptive_noise(&self) -> Option<&AdaptiveNoise> {
+        self.adaptive_noise.as_ref()
     }
 
     /// The resetting, when on ([`MclConfig::with_resetting`]).

@@ -1,8 +1,10 @@
 //! The particle filter: Monte Carlo localization (Thrun Table 8.2) with augmented-MCL recovery
 //! (Table 8.3), on caller-placed storage.
 
+use super::adaptive::Prior;
 use super::config::{MclConfig, MclError, Particles, Update, MAX_PARTICLES, RETRY_LEVEL_RATE};
 use super::estimate::{Estimate, Moments};
+use super::kld::BinCount;
 use super::motion::{sample_words, OdometryStep};
 use super::quality::{Quality, QualityReport, QualityState};
 use super::resample::{apply_counts, low_variance_counts_of_total};
@@ -36,6 +38,13 @@ struct Reweighted {
     impossible: bool,
     /// The share of the weight near the estimate's centre (0 to 1).
     concentration: f32,
+    /// The largest log-weight; with `from_uniform`, particle `i`'s log-likelihood is
+    /// `max + ln wᵢ` (the weights left in the store).
+    max: f32,
+    /// The weights before this weighing were uniform.
+    from_uniform: bool,
+    /// The highest-weighted particle.
+    best: Pose,
 }
 
 /// Monte Carlo localization over caller-placed [`Particles`].
@@ -81,6 +90,12 @@ pub struct Mcl<'p, const N: usize> {
     expansions: u16,
     tracking_streak: u16,
     lost_streak: u16,
+    /// The adaptive motion noise's variance scale (1 when off).
+    noise_scale: f32,
+    /// A motion was predicted since the last update.
+    moved: bool,
+    /// Candidates of a free-space reset still to be scored at later updates.
+    reset_pending: u32,
 }
 
 impl<'p, const N: usize> Mcl<'p, N> {
@@ -112,6 +127,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             expansions: 0,
             tracking_streak: 0,
             lost_streak: 0,
+            noise_scale: 1.0,
+            moved: false,
+            reset_pending: 0,
         })
     }
 
@@ -142,6 +160,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.expansions = 0;
         self.tracking_streak = 0;
         self.lost_streak = 0;
+        self.noise_scale = 1.0;
+        self.moved = false;
+        self.reset_pending = 0;
         self.estimate = Estimate::of(self.poses(), self.weights());
     }
 
@@ -233,6 +254,20 @@ impl<'p, const N: usize> Mcl<'p, N> {
         &self.quality
     }
 
+    /// The variance scale of the odometry noise in use: 1 unless the adaptive motion noise
+    /// ([`MclConfig::with_adaptive_noise`]) is on, then within its bounds (1 after an
+    /// initialization).
+    pub fn noise_scale(&self) -> f32 {
+        self.noise_scale
+    }
+
+    /// Candidates of a free-space reset still to be scored at later updates
+    /// ([`Resetting::candidates_per_update`](super::Resetting::candidates_per_update); 0 when
+    /// no reset is in progress).
+    pub fn reset_pending(&self) -> u32 {
+        self.reset_pending
+    }
+
     /// The configuration.
     pub fn config(&self) -> &MclConfig {
         &self.config
@@ -251,7 +286,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// Moves every particle by a sample of the odometry motion model (Table 5.6; the model of
     /// [`OdometryNoise::sample`](super::OdometryNoise::sample)), in particle order. A step of
     /// exactly zero (the robot did not move) leaves the particles alone and draws nothing, as
-    /// AMCL does not update when the robot stands still.
+    /// AMCL does not update when the robot stands still. With the adaptive motion noise
+    /// ([`MclConfig::with_adaptive_noise`]) the standard deviations are those of the model times
+    /// `√`[`Mcl::noise_scale`].
     ///
     /// # Random numbers
     /// Each particle draws one `next_u64` whose low and high halves start the normals of δrot1
@@ -271,6 +308,13 @@ impl<'p, const N: usize> Mcl<'p, N> {
             self.estimate.pose = step.apply(&self.estimate.pose);
         }
         let sigmas = self.config.noise.sigmas(step);
+        let sigmas = if self.config.adaptive_noise.is_some() {
+            self.moved = true;
+            let k = math::sqrt(self.noise_scale);
+            (k * sigmas.0, k * sigmas.1, k * sigmas.2)
+        } else {
+            sigmas
+        };
         if self.config.retry() {
             let (s_rot1, s_trans, s_rot2) = sigmas;
             self.retry_sigma_xy_m = s_trans.max(step.trans_m() * s_rot1);
@@ -468,6 +512,12 @@ impl<'p, const N: usize> Mcl<'p, N> {
         if n == 0 {
             return Err(MclError::NotInitialized);
         }
+        // The adaptive motion noise's prior: the predicted set, before the scan.
+        let prior = match (self.config.adaptive_noise, self.moved) {
+            (Some(_), true) => Prior::of(self.poses(), self.weights(), self.uniform),
+            _ => None,
+        };
+        self.moved = false;
         // At most two weighings (the second after a retry or an expansion), from one call site
         // so that the score is inlined once.
         let mut first: Option<(f32, QualityReport)> = None;
@@ -491,6 +541,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
                     rw.concentration,
                 );
                 first = Some((rw.ln_total, report));
+                if let (Some(a), Some(prior)) = (self.config.adaptive_noise, prior) {
+                    self.noise_scale = a.next_scale(self.noise_scale, prior.nis(&rw.best));
+                }
                 if self.config.retry() && self.collapsed(ln_beam) {
                     self.resample(0, rw.sum, None, rng);
                     self.spread(rng);
@@ -548,14 +601,49 @@ impl<'p, const N: usize> Mcl<'p, N> {
             }
         }
         self.estimate = rw.estimate;
-        if let (true, Some(r), Some(free)) = (reset, self.config.resetting, free) {
-            if r.reset_candidates > 1 {
-                let m = ((n as f32 * r.reset_fraction) as usize).clamp(1, n);
-                // The survivors first (all of the set's places are then equal), then the m
-                // places compete with the candidates.
-                self.resample(0, rw.sum, None, rng);
-                let replaced =
-                    self.fill_by_selection(m, r.reset_candidates, free, &mut log_likelihood, rng);
+        if report.state == Quality::Tracking {
+            // Found (or never lost): a reset in progress stops.
+            self.reset_pending = 0;
+        }
+        if let (Some(r), Some(free)) = (self.config.resetting, free) {
+            let m = ((n as f32 * r.reset_fraction) as usize).clamp(1, n);
+            let batch = |left: u32| match r.candidates_per_update {
+                0 => left,
+                b => left.min(b),
+            };
+            let started = reset && r.reset_candidates > 1;
+            let continued = !reset && self.reset_pending > 0 && r.reset_candidates > 1;
+            if started || continued {
+                let left = if started {
+                    u32::try_from(m.saturating_mul(usize::from(r.reset_candidates)))
+                        .unwrap_or(u32::MAX)
+                } else {
+                    self.reset_pending
+                };
+                let now = batch(left);
+                self.reset_pending = left - now;
+                let scored = continued && rw.from_uniform && !rw.impossible;
+                if scored {
+                    // The kept poses' scores are this weighing's log-likelihoods.
+                    let max = rw.max;
+                    self.store
+                        .weights
+                        .iter_mut()
+                        .take(n)
+                        .for_each(|w| *w = max + math::ln(*w));
+                } else {
+                    // The survivors first (all of the set's places are then equal), then the m
+                    // places compete with the candidates.
+                    self.resample(0, rw.sum, None, rng);
+                }
+                let replaced = self.fill_by_selection(
+                    m,
+                    now as usize,
+                    !scored,
+                    free,
+                    &mut log_likelihood,
+                    rng,
+                );
                 return Ok(Update {
                     estimate: rw.estimate,
                     ln_avg_likelihood: ln_avg,
@@ -565,7 +653,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
                     retried,
                     quality: report,
                     expanded,
-                    reset: replaced > 0,
+                    reset: started && replaced > 0,
                     unexplained: 0,
                 });
             }
@@ -578,7 +666,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
         };
         let due = self.resampling_due(rw.estimate.ess, rw.impossible) || m > 0;
         let mut injected = 0u16;
-        if due {
+        if due && self.config.kld.is_some() {
+            injected = self.resample_kld(m, rw.sum, free, rng);
+        } else if due {
             injected = self.resample(m, rw.sum, free, rng);
         } else {
             let inv = 1.0 / rw.sum;
@@ -652,6 +742,9 @@ impl<'p, const N: usize> Mcl<'p, N> {
             estimate,
             impossible,
             concentration: (near.weight() / sum).clamp(0.0, 1.0),
+            max,
+            from_uniform: uniform,
+            best: center,
         })
     }
 
@@ -744,15 +837,17 @@ impl<'p, const N: usize> Mcl<'p, N> {
 
     /// Sensor resetting in fixed memory ([`Resetting::reset_candidates`]): the particles at
     /// the `m` places `⌊j·n/m⌋` (`j` < `m`, spread over the set) are scored by
-    /// `log_likelihood` and compete with `m·k` poses drawn uniformly from `free` (four
-    /// `next_u32` each, [`FreeSpace::sample_pose`]), scored one at a time: each candidate that
-    /// scores better than the worst kept one takes its place (a NaN score never wins). So a
-    /// cloud that was right after all (a false `Lost`) keeps its particles, and one that was
-    /// wrong gives way. The weights are left uniform. Returns the places taken by candidates.
+    /// `log_likelihood` (when `rescore`; otherwise their weights hold their scores already)
+    /// and compete with `candidates` poses drawn uniformly from `free` (four `next_u32` each,
+    /// [`FreeSpace::sample_pose`]), scored one at a time: each candidate that scores better
+    /// than the worst kept one takes its place (a NaN score never wins). So a cloud that was
+    /// right after all (a false `Lost`) keeps its particles, and one that was wrong gives way.
+    /// The weights are left uniform. Returns the places taken by candidates.
     fn fill_by_selection<F: FnMut(&Pose) -> f32, R: Rng + ?Sized>(
         &mut self,
         m: usize,
-        k: u16,
+        candidates: usize,
+        rescore: bool,
         free: &FreeSpace<'_>,
         log_likelihood: &mut F,
         rng: &mut R,
@@ -769,7 +864,11 @@ impl<'p, const N: usize> Mcl<'p, N> {
         let finite = |l: f32| if l.is_nan() { f32::NEG_INFINITY } else { l };
         for j in 0..m {
             if let (Some(p), Some(w)) = (poses.get(place(j)), scores.get_mut(place(j))) {
-                *w = finite(log_likelihood(p));
+                *w = if rescore {
+                    finite(log_likelihood(p))
+                } else {
+                    finite(*w)
+                };
             }
         }
         let worst_of = |scores: &[f32]| {
@@ -785,7 +884,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         };
         let (mut worst, mut worst_at) = worst_of(scores);
         let mut taken = 0u16;
-        for _ in 0..m.saturating_mul(usize::from(k)) {
+        for _ in 0..candidates {
             let pose = free.sample_pose(rng);
             let l = finite(log_likelihood(&pose));
             if l > worst {
@@ -803,6 +902,79 @@ impl<'p, const N: usize> Mcl<'p, N> {
         }
         self.reset_weights_only();
         taken
+    }
+
+    /// KLD sampling ([`MclConfig::with_kld`]): the new count `n'` from the bins of the
+    /// particles the resampling would draw at the largest count (weight at least half of
+    /// `total/max`), then low-variance resampling of `n' − m` particles and `m` random ones
+    /// from `free` (`m` at most `n'`), in place; `self.len` becomes `n'` (`n' − m` without a
+    /// free space).
+    fn resample_kld<R: Rng + ?Sized>(
+        &mut self,
+        m: usize,
+        total: f32,
+        free: Option<&FreeSpace<'_>>,
+        rng: &mut R,
+    ) -> u16 {
+        let Some(k) = self.config.kld else {
+            return self.resample(m, total, free, rng);
+        };
+        let n = self.len;
+        let hi = usize::from(k.max).min(N);
+        let mut bins = BinCount::new(&k);
+        let at_least = 0.5 * total / hi as f32;
+        for (p, &w) in self.store.poses.iter().zip(&self.store.weights).take(n) {
+            if w >= at_least {
+                bins.add(p);
+            }
+        }
+        let target = k.count(bins.bins(), N);
+        let m = if free.is_some() { m.min(target) } else { 0 };
+        let draws = u16::try_from(target - m).unwrap_or(u16::MAX);
+        let slots = n.max(target);
+        let store = &mut *self.store;
+        let (weights, counts, poses) = (
+            store.weights.get(..n).unwrap_or(&[]),
+            store.counts.get_mut(..slots).unwrap_or(&mut []),
+            store.poses.get_mut(..slots).unwrap_or(&mut []),
+        );
+        counts.iter_mut().skip(n).for_each(|c| *c = 0);
+        low_variance_counts_of_total(
+            weights,
+            total,
+            counts.get_mut(..n).unwrap_or(&mut []),
+            draws,
+            rng,
+        );
+        apply_counts(poses, counts);
+        let mut injected = 0u16;
+        if let Some(free) = free {
+            for (p, c) in poses.iter_mut().zip(counts.iter_mut()) {
+                if usize::from(injected) >= m {
+                    break;
+                }
+                if *c == 0 {
+                    *p = free.sample_pose(rng);
+                    *c = 1;
+                    injected = injected.saturating_add(1);
+                }
+            }
+        }
+        // The filled slots to the front, in order.
+        let mut kept = 0usize;
+        for i in 0..slots {
+            if counts.get(i).copied().unwrap_or(0) != 0 {
+                if let Some(p) = poses.get(i).copied() {
+                    if let Some(q) = poses.get_mut(kept) {
+                        *q = p;
+                    }
+                }
+                kept += 1;
+            }
+        }
+        self.len = kept.max(1);
+        self.reset_weights_only();
+        injected
     }
 
     /// Low-variance resampling of `n − m` particles and `m` random ones from `free`, in place.
@@ -891,9 +1063,11 @@ mod tests {
     fn eighteen_bytes_per_particle() {
         assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
         let fixed = core::mem::size_of::<Mcl<'_, 1000>>();
-        // 280 on a 64-bit host: the quality signal's averages (the slow average of the
-        // explained share included) and the recovery's counters; nothing per particle.
-        assert!(fixed <= 280, "{fixed}");
+        // 336 on a 64-bit host: the quality signal's averages (the slow average of the
+        // explained share included), the recovery's counters, the adaptive motion noise's and
+        // KLD sampling's parameters, the noise scale, the reset in progress; nothing per
+        // particle.
+        assert!(fixed <= 336, "{fixed}");
         println!("Mcl: {fixed} bytes besides the particles");
     }
 
@@ -1051,6 +1225,232 @@ mod tests {
             retried.push(up.retried);
         }
         (retried, (f.estimate().pose.y_m - truth.y_m).abs())
+    }
+
+    /// Drives a 300-particle cloud 0.5 m per step along +x for 60 updates with the odometry
+    /// saying exactly that, while the truth also wanders by a normal step of σ `extra_m` in x
+    /// and y (drawn from its own generator); the scan is a narrow Gaussian (3 cm) around the
+    /// truth. Returns the noise scale after each update and the last x–y error.
+    fn wander(config: MclConfig, extra_m: f32) -> (Vec<f32>, f32) {
+        let mut store = Particles::<300>::new();
+        let mut f = Mcl::new(&mut store, config).unwrap();
+        let mut rng = SplitMix64::new(11);
+        let mut world = SplitMix64::new(12);
+        f.init_gaussian(300, &Pose::default(), 0.02, 0.01, &mut rng)
+            .unwrap();
+        let step = OdometryStep::new(0.0, 0.5, 0.0).unwrap();
+        let mut truth = Pose::default();
+        let mut scales = Vec::new();
+        for _ in 0..60 {
+            let (a, b) = standard_normal_pair(&mut world);
+            truth = step.apply(&truth);
+            truth.x_m += extra_m * a;
+            truth.y_m += extra_m * b;
+            f.predict(&step, &mut rng);
+            let t = truth;
+            f.update_with(
+                |p| -((p.x_m - t.x_m).powi(2) + (p.y_m - t.y_m).powi(2)) / (2.0 * 0.03 * 0.03),
+                None,
+                &mut rng,
+            )
+            .unwrap();
+            assert!(f.poses().iter().all(Pose::is_finite));
+            scales.push(f.noise_scale());
+        }
+        let e = f.estimate().pose;
+        (scales, (e.x_m - truth.x_m).hypot(e.y_m - truth.y_m))
+    }
+
+    #[test]
+    fn adaptive_noise_widens_for_bad_odometry_and_narrows_for_good() {
+        use crate::mcl::AdaptiveNoise;
+        // The model: α 0.001, σ_trans = √(0.001·0.25) ≈ 1.6 cm per 0.5 m step.
+        let base = MclConfig::new(OdometryNoise::uniform(0.001).unwrap(), 0.5, 0.0, 0.0).unwrap();
+        let a = AdaptiveNoise::DEFAULT;
+        let on = base.with_adaptive_noise(Some(a)).unwrap();
+        // Off: the scale never moves.
+        let (off, _) = wander(base, 0.08);
+        assert!(off.iter().all(|&q| q == 1.0));
+        // Odometry 8 cm off per step, five times the model's σ: the scale grows to its bound
+        // (the variance would need about 25×; the default bound is 4) and the filter keeps up.
+        let (bad, err) = wander(on, 0.08);
+        assert!(bad
+            .iter()
+            .all(|&q| (a.min_scale..=a.max_scale).contains(&q)));
+        let late = bad[40..].iter().sum::<f32>() / 20.0;
+        assert!(late > 0.9 * a.max_scale, "{bad:?}");
+        assert!(err < 0.1, "{err}");
+        // Exact odometry with a model 20× too wide (α 0.02): the scale shrinks (on average
+        // well below 1; the floor is 0.25).
+        let wide = MclConfig::new(OdometryNoise::uniform(0.02).unwrap(), 0.5, 0.0, 0.0)
+            .unwrap()
+            .with_adaptive_noise(Some(a))
+            .unwrap();
+        let (good, err) = wander(wide, 0.0);
+        let late = good[20..].iter().sum::<f32>() / 40.0;
+        assert!(late < 0.75, "{good:?}");
+        assert!(err < 0.05, "{err}");
+        // Refused values.
+        assert_eq!(
+            base.with_adaptive_noise(Some(AdaptiveNoise { rate: 0.0, ..a }))
+                .err(),
+            Some(MclError::BadConfig)
+        );
+    }
+
+    #[test]
+    fn kld_count_grows_with_the_spread_and_shrinks_back() {
+        use crate::mcl::Kld;
+        let kld = Kld {
+            min: 100,
+            max: 2000,
+            ..Kld::NAV2
+        };
+        // Wide motion noise: σ_trans ≈ 0.7 m per 1 m step.
+        let config = MclConfig::new(OdometryNoise::uniform(0.5).unwrap(), 1.0, 0.0, 0.0)
+            .unwrap()
+            .with_kld(Some(kld))
+            .unwrap();
+        let mut store = Particles::<3000>::new();
+        let mut f = Mcl::new(&mut store, config).unwrap();
+        let mut rng = SplitMix64::new(9);
+        f.init_gaussian(100, &Pose::default(), 0.02, 0.01, &mut rng)
+            .unwrap();
+        let step = OdometryStep::new(0.0, 1.0, 0.0).unwrap();
+        let mut counts = Vec::new();
+        // Ten steps scored by an almost flat likelihood: the cloud spreads over many bins.
+        for _ in 0..10 {
+            f.predict(&step, &mut rng);
+            let up = f
+                .update_with(|p| 0.01 * (37.0 * p.x_m).sin(), None, &mut rng)
+                .unwrap();
+            assert!(up.resampled);
+            counts.push(f.len());
+        }
+        // Then a sharp one (5 cm) around a pose in the cloud: it collapses.
+        let at = f.estimate().pose;
+        for _ in 0..5 {
+            f.update_with(
+                |p| -((p.x_m - at.x_m).powi(2) + (p.y_m - at.y_m).powi(2)) / (2.0 * 0.05 * 0.05),
+                None,
+                &mut rng,
+            )
+            .unwrap();
+            counts.push(f.len());
+        }
+        assert!(
+            counts.iter().all(|&n| (100..=2000).contains(&n)),
+            "{counts:?}"
+        );
+        assert_eq!(counts[..10].iter().max(), Some(&2000), "{counts:?}");
+        assert_eq!(*counts.last().unwrap(), 100, "{counts:?}");
+        assert_eq!(f.weights().len(), f.len());
+        assert!(f.poses().iter().all(Pose::is_finite));
+        // A capacity below max: never more than the capacity.
+        let mut small = Particles::<500>::new();
+        let mut g = Mcl::new(&mut small, config).unwrap();
+        g.init_gaussian(100, &Pose::default(), 0.02, 0.01, &mut rng)
+            .unwrap();
+        for _ in 0..10 {
+            g.predict(&step, &mut rng);
+            g.update_with(|p| 0.01 * (37.0 * p.x_m).sin(), None, &mut rng)
+                .unwrap();
+            assert!(g.len() <= 500);
+        }
+        assert_eq!(g.len(), 500);
+    }
+
+    #[test]
+    fn a_reset_is_spread_over_updates() {
+        use crate::field::{emit_free_space, free_space_len, FreeSpaceGrid};
+        use crate::mcl::Resetting;
+        use core::cell::Cell;
+        // 10 m × 10 m, every 0.25 m cell free.
+        let grid = FreeSpaceGrid {
+            width: 40,
+            height: 40,
+            cell_size_m: 0.25,
+            origin_x_m: 0.0,
+            origin_y_m: 0.0,
+        };
+        let flags = vec![true; 1600];
+        let mut bytes = vec![0u8; free_space_len(&grid, &flags).unwrap()];
+        emit_free_space(&grid, &flags, &mut bytes).unwrap();
+        let free = FreeSpace::parse(&bytes).unwrap();
+        const N: usize = 200;
+        let batch = 300u32;
+        let r = Resetting {
+            reset_candidates: 10,
+            candidates_per_update: batch,
+            settled_after: 0,
+            ..Resetting::DEFAULT
+        };
+        let config = MclConfig::new(OdometryNoise::uniform(0.01).unwrap(), 0.5, 0.0, 0.0)
+            .unwrap()
+            .with_resetting(Some(r))
+            .unwrap();
+        let mut store = Particles::<N>::new();
+        let mut f = Mcl::new(&mut store, config).unwrap();
+        let mut rng = SplitMix64::new(5);
+        let mut truth = Pose::new(2.0, 2.0, 0.0);
+        f.init_gaussian(N, &truth, 0.05, 0.02, &mut rng).unwrap();
+        let step = OdometryStep::new(0.0, 0.1, 0.0).unwrap();
+        let calls = Cell::new(0usize);
+        let (mut started, mut pending) = (None, Vec::new());
+        for k in 0..40 {
+            truth = step.apply(&truth);
+            if k == 10 {
+                // Kidnapped: 5 m away.
+                truth.y_m += 5.0;
+            }
+            f.predict(&step, &mut rng);
+            let t = truth;
+            calls.set(0);
+            let up = f
+                .update_with(
+                    |p| {
+                        calls.set(calls.get() + 1);
+                        -((p.x_m - t.x_m).powi(2) + (p.y_m - t.y_m).powi(2)) / (2.0 * 0.1 * 0.1)
+                    },
+                    Some(&free),
+                    &mut rng,
+                )
+                .unwrap();
+            // An ordinary weighing, an expansion's second one, the reset's rescoring of the
+            // set at its start, and at most `batch` candidates.
+            assert!(
+                calls.get() <= 3 * N + batch as usize,
+                "{k}: {}",
+                calls.get()
+            );
+            if up.reset {
+                // Started (or, still lost 2 updates later, started again).
+                started.get_or_insert(k);
+                assert_eq!(f.reset_pending(), 10 * N as u32 - batch);
+            }
+            if started.is_some() {
+                pending.push(f.reset_pending());
+            }
+        }
+        assert!(started.is_some(), "never reset");
+        // Counted down by the batch at each update until done or tracking again (or started
+        // again).
+        for w in pending.windows(2) {
+            assert!(
+                w[1] == 0 || w[1] + batch == w[0] || w[1] == 10 * N as u32 - batch,
+                "{pending:?}"
+            );
+        }
+        assert!(
+            pending.windows(2).any(|w| w[1] + batch == w[0]),
+            "{pending:?}"
+        );
+        assert_eq!(*pending.last().unwrap(), 0, "{pending:?}");
+        let e = f.estimate().pose;
+        assert!(
+            (e.x_m - truth.x_m).hypot(e.y_m - truth.y_m) < 0.3,
+            "{e:?} {truth:?}"
+        );
     }
 
     #[test]

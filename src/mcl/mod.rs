@@ -16,20 +16,25 @@
 //! - [`quality`]: the localization-quality signal ([`Quality`]: tracking, uncertain, lost)
 //!   reported by every update, and the recovery it drives in fixed memory ([`Resetting`]:
 //!   expansion resetting, free-space resetting, the settle guard).
+//! - [`adaptive`]: the odometry noise scaled by the scans' corrections ([`AdaptiveNoise`],
+//!   opt-in).
+//! - [`kld`]: KLD sampling ([`Kld`], opt-in): the particle count adapts inside the capacity.
 //! - [`unexplained`]: readings the map cannot explain ([`Unexplained`]), left out of an
 //!   update (opt-in).
 //! - [`rng`]: [`SplitMix64`] (the filter's) and [`XorShift64`] (the randomized checks'), seeded
 //!   generators the host and the device run identically.
 //!
 //! Memory: 18 bytes per particle of capacity (pose 12, weight 4, resampling count 2) in
-//! [`Particles`], plus a fixed 272 bytes (on a 64-bit host; less on a 32-bit target) in [`Mcl`]
+//! [`Particles`], plus a fixed 336 bytes (on a 64-bit host; less on a 32-bit target) in [`Mcl`]
 //! (the configuration, the recovery and quality
 //! averages, the last estimate and quality report). See `docs/localization.md` for the
 //! measurements on the Intel lab log.
 
+pub mod adaptive;
 pub mod config;
 pub mod estimate;
 pub mod filter;
+pub mod kld;
 pub mod motion;
 pub mod normal;
 pub mod odometry;
@@ -38,11 +43,13 @@ pub mod resample;
 pub mod rng;
 pub mod unexplained;
 
+pub use adaptive::{AdaptiveNoise, MAX_NOISE_SCALE};
 pub use config::{
     MclConfig, MclError, Particles, Update, MAX_PARTICLES, MAX_RETRY_SCALE, RETRY_LEVEL_RATE,
 };
 pub use estimate::{diagonal_variances, Estimate};
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
+pub use kld::Kld;
 pub use motion::{
     MotionError, OdometryNoise, OdometryStep, IN_PLACE_TURN_M, MAX_ALPHA, MAX_STEP_M,
     MAX_STEP_ROTATION_RAD,

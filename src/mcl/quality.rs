@@ -308,6 +308,14 @@ impl QualityState {
 /// kept ones are stored, in the set itself). That costs `k` scorings per replaced particle, at
 /// reset updates only; with `k` ≤ 1 the poses are uniform draws, kept whatever they score.
 ///
+/// **Spread over updates**: with [`Resetting::candidates_per_update`] `b` > 0, a reset scores
+/// at most `b` candidates per update: the first `b` at the update that starts it, the rest
+/// over the following updates, `b` each, against each update's own scan (the kept poses move
+/// with the odometry in between and are scored by the update's ordinary weighing pass, so a
+/// continuing reset costs `b` scorings more than an ordinary update and no second pass). The
+/// weights stay uniform while it continues; it stops when all `m·k` candidates are scored or
+/// at the first update that reports [`Quality::Tracking`]. `b` = 0 scores all of them at once.
+///
 /// **Settle guard**: while the quality has been `Tracking` for [`Resetting::settled_after`]
 /// updates in a row, augmented MCL (Table 8.3) injects no random particles (a random particle
 /// winning one scan is how a settled filter gets hijacked); the guard lifts at the first update
@@ -330,6 +338,8 @@ pub struct Resetting {
     /// Candidate poses drawn and scored per replaced particle at a free-space reset, the best
     /// kept (0 or 1: uniform draws, unscored).
     pub reset_candidates: u16,
+    /// The most candidates scored per update (0: all at the update that starts the reset).
+    pub candidates_per_update: u32,
 
     /// Updates in a row of `Tracking` after which random injections stop (0: no guard).
     pub settled_after: u16,
@@ -338,8 +348,10 @@ pub struct Resetting {
 impl Resetting {
     /// The defaults: expand below 0.4 explained, σ 0.1 m and 0.05 rad doubling up to 8 times
     /// as much (0.8 m, 0.4 rad), a free-space reset of the whole set after 2 updates in a row
-    /// reported `Lost`, the best of 100 candidates for each particle it replaces, the settle
-    /// guard after 20 updates of `Tracking`.
+    /// reported `Lost`, the best of 100 candidates for each particle it replaces, all scored at
+    /// the update that starts the reset (`candidates_per_update` 0: spreading them over
+    /// updates bounds the cost of an update but slows the recovery from a kidnapping, see
+    /// `docs/localization.md`), the settle guard after 20 updates of `Tracking`.
     pub const DEFAULT: Self = Self {
         expand_below: 0.4,
         sigma_m: 0.1,
@@ -348,6 +360,7 @@ impl Resetting {
         reset_after: 2,
         reset_fraction: 1.0,
         reset_candidates: 100,
+        candidates_per_update: 0,
         settled_after: 20,
     };
 

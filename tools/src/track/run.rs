@@ -3,8 +3,8 @@
 use crate::cmd::scored_log::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::mcl::{
-    Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, Resetting, SplitMix64,
-    Unexplained,
+    AdaptiveNoise, Kld, Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles,
+    Resetting, SplitMix64, Unexplained,
 };
 use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, Tempered};
 use std::io::IsTerminal;
@@ -51,6 +51,15 @@ pub struct RunOptions {
     /// Expansion and free-space resetting and the settle guard driven by the quality signal
     /// (`MclConfig::with_resetting(Some(Resetting::DEFAULT))`); needs the free space.
     pub resetting: bool,
+    /// With `resetting`: the most free-space candidates scored per update
+    /// (`Resetting::candidates_per_update`; 0 scores all at the update that starts the reset).
+    pub reset_per_update: u32,
+    /// The adaptive motion noise (target, rate, smallest and largest variance scale,
+    /// `MclConfig::with_adaptive_noise`); None: off.
+    pub adaptive_noise: Option<[f32; 4]>,
+    /// KLD sampling between these particle counts (nav2's `pf_err` 0.05, `pf_z` 0.99, bins
+    /// 0.5 m and 10°; `MclConfig::with_kld`), starting from `particles`; None: a fixed count.
+    pub kld: Option<(u16, u16)>,
 }
 
 /// The outcome of one run.
@@ -70,6 +79,11 @@ pub struct RunResult {
     pub injected: u64,
     /// Updates at which the retry moved and reweighted the set.
     pub retries: usize,
+    /// The odometry noise's variance scale after each scan (`Mcl::noise_scale`; 1 without the
+    /// adaptive motion noise).
+    pub noise_scales: Vec<f32>,
+    /// The particles in use after each scan.
+    pub particles_in_use: Vec<usize>,
 }
 
 /// Summary figures of a run.
@@ -220,8 +234,27 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             max_share,
         }))
         .map_err(|e| usage(format!("--unexplained: {e}")))?
-        .with_resetting(o.resetting.then_some(Resetting::DEFAULT))
-        .map_err(|e| usage(format!("--resetting: {e}")))?;
+        .with_resetting(o.resetting.then_some(Resetting {
+            candidates_per_update: o.reset_per_update,
+            ..Resetting::DEFAULT
+        }))
+        .map_err(|e| usage(format!("--resetting: {e}")))?
+        .with_adaptive_noise(
+            o.adaptive_noise
+                .map(|[target, rate, min_scale, max_scale]| AdaptiveNoise {
+                    target,
+                    rate,
+                    min_scale,
+                    max_scale,
+                }),
+        )
+        .map_err(|e| usage(format!("--adaptive-noise: {e}")))?
+        .with_kld(o.kld.map(|(min, max)| Kld {
+            min,
+            max,
+            ..Kld::NAV2
+        }))
+        .map_err(|e| usage(format!("--kld: {e}")))?;
     let lf = LikelihoodField::new(view, input.params);
     let model = Tempered::new(lf, o.kappa, o.stride)
         .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;
@@ -250,6 +283,8 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         resamplings: 0,
         injected: 0,
         retries: 0,
+        noise_scales: Vec::with_capacity(n),
+        particles_in_use: Vec::with_capacity(n),
     };
     let progress = std::io::stderr().is_terminal();
     let odom = match &input.odometry {
@@ -318,6 +353,8 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         let dx = f64::from(est.x_m - truth.x_m);
         let dy = f64::from(est.y_m - truth.y_m);
         out.estimates.push(est);
+        out.noise_scales.push(mcl.noise_scale());
+        out.particles_in_use.push(mcl.len());
         out.trans_err_m.push(dx.hypot(dy));
         out.heading_err_deg.push(
             f64::from(wrap_angle(est.theta_rad - truth.theta_rad))

@@ -132,6 +132,23 @@ pub struct TrackArgs {
     /// updates. Needs a field built with --free-space.
     #[arg(long)]
     pub resetting: bool,
+    /// The adaptive motion noise (off by default; MclConfig::with_adaptive_noise,
+    /// docs/localization.md): the odometry variances scaled at every update so that the
+    /// scan's correction of the predicted cloud matches its spread. "TARGET,RATE,MIN,MAX" (the
+    /// squared Mahalanobis correction steered to, the rate, the variance scale's bounds), or no
+    /// value for the defaults "1,0.3,0.25,4" (AdaptiveNoise::DEFAULT).
+    #[arg(long, num_args = 0..=1, default_missing_value = "1,0.3,0.25,4", value_name = "T,R,MIN,MAX")]
+    pub adaptive_noise: Option<String>,
+    /// With --resetting: the most free-space candidates scored per update (0, the default:
+    /// all 100 × particles at the update that starts the reset; N spreads them over updates,
+    /// N each, Resetting::candidates_per_update).
+    #[arg(long, default_value_t = 0, value_name = "N", requires = "resetting")]
+    pub reset_per_update: u32,
+    /// KLD sampling "MIN,MAX" (off by default; MclConfig::with_kld with nav2's pf_err 0.05,
+    /// pf_z 0.99 and 0.5 m / 10° bins): the particles in use adapt at each resampling between
+    /// MIN and MAX, starting from --particles.
+    #[arg(long, value_name = "MIN,MAX")]
+    pub kld: Option<String>,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -184,7 +201,33 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         }
         None => None,
     };
+    let adaptive_noise = match &args.adaptive_noise {
+        Some(text) => {
+            let v = parse_list(text, "--adaptive-noise", 4)?;
+            Some([v[0], v[1], v[2], v[3]])
+        }
+        None => None,
+    };
+    let kld = match &args.kld {
+        Some(text) => {
+            let v = parse_list(text, "--kld", 2)?;
+            let count = |x: f32| {
+                (x >= 1.0 && x <= MAX_TRACK_PARTICLES as f32 && x.fract() == 0.0)
+                    .then_some(x as u16)
+                    .ok_or_else(|| {
+                        usage(format!(
+                            "--kld {text:?}: counts in 1..={MAX_TRACK_PARTICLES}"
+                        ))
+                    })
+            };
+            Some((count(v[0])?, count(v[1])?))
+        }
+        None => None,
+    };
     Ok(RunOptions {
+        reset_per_update: args.reset_per_update,
+        adaptive_noise,
+        kld,
         particles: args.particles,
         kappa: args.kappa,
         stride: args.stride,
@@ -348,6 +391,15 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
             resamplings: r.resamplings,
             injected: r.injected,
             retries: r.retries,
+            particles_mean_max: [
+                r.particles_in_use.iter().sum::<usize>() as f32
+                    / r.particles_in_use.len().max(1) as f32,
+                r.particles_in_use.iter().copied().max().unwrap_or(0) as f32,
+            ],
+            noise_scale_mean_max: [
+                r.noise_scales.iter().sum::<f32>() / r.noise_scales.len().max(1) as f32,
+                r.noise_scales.iter().copied().fold(0.0, f32::max),
+            ],
         })
         .collect();
     Ok(TrackReport {
@@ -363,6 +415,8 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         resetting: o.resetting,
         retry: o.retry.map(|(d, k)| [d, k]),
         kidnap: o.kidnap,
+        adaptive_noise: o.adaptive_noise,
+        kld: o.kld.map(|(a, b)| [a, b]),
         runs: per,
         trans_rmse_cm_min_med_max: rmse,
         heading_rmse_deg_min_med_max: head,

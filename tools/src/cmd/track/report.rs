@@ -19,6 +19,11 @@ pub struct SeedRun {
     pub injected: u64,
     /// Retries.
     pub retries: usize,
+    /// The odometry noise's variance scale (1 without `--adaptive-noise`): mean and largest
+    /// over the scans.
+    pub noise_scale_mean_max: [f32; 2],
+    /// The particles in use: mean and largest over the scans.
+    pub particles_mean_max: [f32; 2],
 }
 
 /// What `beamfield track` found over its seeds.
@@ -48,6 +53,10 @@ pub struct TrackReport {
     pub retry: Option<[f32; 2]>,
     /// The kidnapping's scan.
     pub kidnap: Option<usize>,
+    /// The adaptive motion noise (target, rate, smallest and largest scale), when on.
+    pub adaptive_noise: Option<[f32; 4]>,
+    /// KLD sampling's fewest and most particles, when on.
+    pub kld: Option<[u16; 2]>,
     /// Every seed's run.
     pub runs: Vec<SeedRun>,
     /// Translation RMSE over the seeds, cm: min, median, max.
@@ -119,6 +128,18 @@ impl fmt::Display for TrackReport {
                 .map(|k| format!(", kidnapped at scan {k}"))
                 .unwrap_or_default()
         )?;
+        if let Some((lo, hi)) = o.kld {
+            writeln!(
+                f,
+                "KLD sampling: {lo} ..= {hi} particles (pf_err 0.05, pf_z 0.99, bins 0.5 m / 10°)"
+            )?;
+        }
+        if let Some([t, r, lo, hi]) = o.adaptive_noise {
+            writeln!(
+                f,
+                "adaptive motion noise: on (target {t}, rate {r}, variance scale {lo} ..= {hi})"
+            )?;
+        }
         if o.resetting {
             writeln!(
                 f,
@@ -149,7 +170,7 @@ impl fmt::Display for TrackReport {
             writeln!(
                 f,
                 "seed {}: trans RMSE {:.2} cm, heading RMSE {:.2}°, max {:.3} m, within 10 cm/2° \
-                 {:.1} %, {}{}{}; {} resamplings, {} injected, {} retries, {} skipped",
+                 {:.1} %, {}{}{}; {} resamplings, {} injected, {} retries, {} skipped{}",
                 r.seed,
                 m.trans_rmse_m * 100.0,
                 m.heading_rmse_deg,
@@ -168,6 +189,17 @@ impl fmt::Display for TrackReport {
                 r.injected,
                 r.retries,
                 r.skipped,
+                if o.adaptive_noise.is_some() {
+                    let [mean, max] = r.noise_scale_mean_max;
+                    format!("; noise scale mean {mean:.2}, max {max:.2}")
+                } else {
+                    String::new()
+                } + &if o.kld.is_some() {
+                    let [mean, max] = r.particles_mean_max;
+                    format!("; particles mean {mean:.0}, max {max:.0}")
+                } else {
+                    String::new()
+                },
             )?;
         }
         write!(
