@@ -61,15 +61,20 @@ pub struct ScanRecord {
     pub scan: usize,
     /// The estimate: x, y (metres), heading (radians).
     pub pose: [f32; 3],
-    /// The estimate's covariance: xx, xy, yy (m²), θθ (rad²).
+    /// The reported covariance (`Update::covariance`): xx, xy, yy (m²), θθ (rad²).
     pub covariance: [f32; 4],
+    /// The particles' covariance (`Estimate::covariance`): xx, xy, yy (m²), θθ (rad²).
+    pub particle_covariance: [f32; 4],
     /// The effective sample size of the weights the estimate came from.
     pub ess: f32,
     /// The quality signal's state: `tracking`, `uncertain` or `lost`.
     pub quality: &'static str,
-    /// The scan's share of beams the map explains at the estimate (0 to 1, the quality
-    /// signal's input; NaN, as null, when the update was skipped).
+    /// The scan's share of beams the map explains at the estimate, clutter set aside (0 to 1,
+    /// the quality signal's input; NaN, as null, when the update was skipped).
     pub explained: f32,
+    /// How the scan fits the map at the estimate, shares of its beams: explained, short of a
+    /// mapped wall and not explained, through a mapped wall (`beamfield::mcl::ScanFit`).
+    pub fit: [f32; 3],
     /// The likelihood per beam, `ln w_avg / beams` (nats).
     pub ln_beam: f32,
     /// The estimate's spread (metres, radians) and concentration (0 to 1), as the quality
@@ -450,13 +455,20 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             out.heading_err_deg.push(h);
         }
         let c = &estimate.covariance;
+        let r = update.map_or_else(|| *mcl.reported_covariance(), |u| u.covariance);
         out.per_scan.push(ScanRecord {
             scan: k,
             pose: [est.x_m, est.y_m, est.theta_rad],
-            covariance: [c[0][0], c[0][1], c[1][1], c[2][2]],
+            covariance: [r[0][0], r[0][1], r[1][1], r[2][2]],
+            particle_covariance: [c[0][0], c[0][1], c[1][1], c[2][2]],
             ess: estimate.ess,
             quality: quality_name(quality.state),
             explained: quality.explained,
+            fit: [
+                quality.fit.explained,
+                quality.fit.short,
+                quality.fit.through,
+            ],
             ln_beam: quality.ln_beam,
             spread: [quality.spread_m, quality.spread_rad, quality.concentration],
             expanded: update.is_some_and(|u| u.expanded),
