@@ -221,11 +221,12 @@ impl ReportedCovariance {
         if out[2][2] > self.max_var_rad2 {
             let k = self.max_var_rad2 / out[2][2];
             let r = math::sqrt(k);
-            out[2][2] = self.max_var_rad2;
-            for i in 0..2 {
-                out[i][2] *= r;
-                out[2][i] *= r;
-            }
+            let [r0, r1, r2] = &mut out;
+            r0[2] *= r;
+            r1[2] *= r;
+            r2[0] *= r;
+            r2[1] *= r;
+            r2[2] = self.max_var_rad2;
         }
         out
     }
