@@ -71,5 +71,6 @@ pub fn intel_input() -> beamfield_tools::track::TrackInput {
         scans: log.scans.iter().map(|s| s.ranges_m.clone()).collect(),
         logged: log.scans.iter().map(|s| s.pose).collect(),
         odometry: None,
+        reference: None,
     }
 }

@@ -1,7 +1,7 @@
 //! The localizer's storage, parameters, errors and update report.
 
 use super::adaptive::AdaptiveNoise;
-use super::estimate::Estimate;
+use super::estimate::{Estimate, ReportedCovariance};
 use super::kld::Kld;
 use super::motion::OdometryNoise;
 use super::quality::{QualityReport, QualityThresholds, Resetting};
@@ -101,6 +101,8 @@ pub struct MclConfig {
     pub(super) adaptive_noise: Option<AdaptiveNoise>,
     /// KLD sampling; None: off (the count in use is the initialization's).
     pub(super) kld: Option<Kld>,
+    /// How the reported covariance is made from the particles'.
+    pub(super) covariance: ReportedCovariance,
 }
 
 impl MclConfig {
@@ -144,7 +146,26 @@ impl MclConfig {
             unexplained_max_share: 0.0,
             adaptive_noise: None,
             kld: None,
+            covariance: ReportedCovariance::DEFAULT,
         })
+    }
+
+    /// How the reported covariance ([`Update::covariance`]) is made from the particles'
+    /// ([`ReportedCovariance::DEFAULT`] unless given; [`ReportedCovariance::PARTICLES`] reports
+    /// the particles' own).
+    ///
+    /// # Errors
+    /// [`MclError::BadConfig`] when [`ReportedCovariance::validate`] refuses it.
+    pub fn with_covariance(self, covariance: ReportedCovariance) -> Result<Self, MclError> {
+        if !covariance.validate() {
+            return Err(MclError::BadConfig);
+        }
+        Ok(Self { covariance, ..self })
+    }
+
+    /// How the reported covariance is made.
+    pub fn covariance(&self) -> &ReportedCovariance {
+        &self.covariance
     }
 
     /// The quality signal's thresholds ([`QualityThresholds::DEFAULT`] unless given).
@@ -310,8 +331,13 @@ pub const RETRY_LEVEL_RATE: f32 = 0.1;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Update {
-    /// The estimate from the weighted set, before resampling.
+    /// The estimate from the weighted set, before resampling (its covariance is the
+    /// particles').
     pub estimate: Estimate,
+    /// The covariance to report with the estimate (m², rad², row-major; `ReportedCovariance`:
+    /// the particles' inflated by what they cannot see, and growing while the quality is not
+    /// `Tracking`).
+    pub covariance: [[f32; 3]; 3],
     /// `ln` of the average measurement likelihood `Σ wᵢ p(z | xᵢ)` (nats; the weights before
     /// the update sum to 1), Table 8.3's `w_avg`.
     pub ln_avg_likelihood: f32,

@@ -101,6 +101,143 @@ impl Estimate {
     }
 }
 
+/// How the covariance the filter reports ([`Update::covariance`](super::Update::covariance)) is
+/// made from the particles' ([`Estimate::covariance`]), so that a consumer that weighs the
+/// pose by it (nav2, robot_localization) is not told more than the filter knows.
+///
+/// - **Tracking**: the particles' covariance plus `floor_m²` on x and y and `floor_rad²` on the
+///   heading: the error the particle set cannot see — the map's and the scan's own resolution
+///   and the disagreement between the map and the world, which every particle shares.
+/// - **Uncertain or Lost**: at least the previous update's reported covariance times `growth`
+///   (`lost_growth` when Lost), whichever of the two has the larger position variance: it grows
+///   while the filter doubts, and never shrinks towards zero until the filter tracks again.
+/// - Never above `max_var_m2` in x or y (the matrix scaled down to it) or `max_var_rad2` in
+///   heading: the reported value stays finite.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ReportedCovariance {
+    /// Standard deviation added in quadrature to x and y, metres (≥ 0).
+    pub floor_m: f32,
+    /// Standard deviation added in quadrature to the heading, radians (≥ 0).
+    pub floor_rad: f32,
+    /// Factor (≥ 1) by which the reported covariance at least grows per `Uncertain` update.
+    pub growth: f32,
+    /// Factor (≥ `growth`) by which it at least grows per `Lost` update.
+    pub lost_growth: f32,
+    /// Largest reported variance of x and of y, m² (> 0).
+    pub max_var_m2: f32,
+    /// Largest reported variance of the heading, rad² (> 0).
+    pub max_var_rad2: f32,
+}
+
+impl ReportedCovariance {
+    /// The defaults: `floor_m` 0.06 m (chosen on the tuning buildings, docs/localization.md
+    /// "Honest covariance") and `floor_rad` 0.02 rad, growth 1.2 per `Uncertain` update and 1.5
+    /// per `Lost` one, at most (100 m)² and π² rad².
+    pub const DEFAULT: Self = Self {
+        floor_m: 0.06,
+        floor_rad: 0.02,
+        growth: 1.2,
+        lost_growth: 1.5,
+        max_var_m2: 1.0e4,
+        max_var_rad2: core::f32::consts::PI * core::f32::consts::PI,
+    };
+
+    /// The particles' covariance as reported (the particles' own, without inflation).
+    pub const PARTICLES: Self = Self {
+        floor_m: 0.0,
+        floor_rad: 0.0,
+        growth: 1.0,
+        lost_growth: 1.0,
+        max_var_m2: f32::MAX,
+        max_var_rad2: f32::MAX,
+    };
+
+    /// True when every value is finite (the maxima may be `f32::MAX`) and in range.
+    pub fn validate(&self) -> bool {
+        let ok = |v: f32| v.is_finite() && v >= 0.0;
+        ok(self.floor_m)
+            && ok(self.floor_rad)
+            && self.growth.is_finite()
+            && self.growth >= 1.0
+            && self.lost_growth.is_finite()
+            && self.lost_growth >= self.growth
+            && self.max_var_m2.is_finite()
+            && self.max_var_m2 > 0.0
+            && self.max_var_rad2.is_finite()
+            && self.max_var_rad2 > 0.0
+    }
+
+    /// The covariance to report, from the particles' (`particles`), the last reported one
+    /// (`previous`; all zeros before the first) and the quality state of this update.
+    /// Non-finite entries of `particles` are taken as the maxima.
+    pub fn reported(
+        &self,
+        particles: &[[f32; 3]; 3],
+        previous: &[[f32; 3]; 3],
+        state: super::Quality,
+    ) -> [[f32; 3]; 3] {
+        let mut base = *particles;
+        if !base.iter().flatten().all(|v| v.is_finite()) {
+            base = [[0.0; 3]; 3];
+            base[0][0] = self.max_var_m2;
+            base[1][1] = self.max_var_m2;
+            base[2][2] = self.max_var_rad2;
+        }
+        base[0][0] += self.floor_m * self.floor_m;
+        base[1][1] += self.floor_m * self.floor_m;
+        base[2][2] += self.floor_rad * self.floor_rad;
+        let g = match state {
+            super::Quality::Tracking => 0.0,
+            super::Quality::Uncertain => self.growth,
+            super::Quality::Lost => self.lost_growth,
+        };
+        let grown = previous.map(|row| row.map(|v| v * g));
+        let pos = |c: &[[f32; 3]; 3]| c[0][0].max(c[1][1]);
+        let mut out = if g > 0.0 && pos(&grown) > pos(&base) {
+            // Heading at least as grown too.
+            let mut o = grown;
+            o[2][2] = o[2][2].max(base[2][2]);
+            o
+        } else {
+            base
+        };
+        // Within the maxima: position block scaled down as a whole (stays positive semi-
+        // definite), heading clamped with its cross terms scaled alike.
+        let p = pos(&out);
+        if p > self.max_var_m2 {
+            let k = self.max_var_m2 / p;
+            for (i, row) in out.iter_mut().enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    let f = match (i < 2, j < 2) {
+                        (true, true) => k,
+                        (false, false) => 1.0,
+                        _ => math::sqrt(k),
+                    };
+                    *v *= f;
+                }
+            }
+        }
+        if out[2][2] > self.max_var_rad2 {
+            let k = self.max_var_rad2 / out[2][2];
+            let r = math::sqrt(k);
+            let [r0, r1, r2] = &mut out;
+            r0[2] *= r;
+            r1[2] *= r;
+            r2[0] *= r;
+            r2[1] *= r;
+            r2[2] = self.max_var_rad2;
+        }
+        out
+    }
+}
+
+impl Default for ReportedCovariance {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
 /// `(sin x, cos x)`: Taylor polynomials to degree 5 and 6 for `|x| ≤ 0.5` (truncation below
 /// 1.6e-6 and 5e-8, and far less for the small deviations of a converged cloud: `x⁷/5040`),
 /// [`math::sin_cos`] beyond.
@@ -329,5 +466,47 @@ mod tests {
                 .map(|&w| f64::from(w) * f64::from(w))
                 .sum::<f64>();
         assert!((f64::from(e.ess) / ess - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn reported_covariance_adds_its_floor_and_grows_while_not_tracking() {
+        use super::super::Quality;
+        let r = ReportedCovariance::DEFAULT;
+        assert!(r.validate() && ReportedCovariance::PARTICLES.validate());
+        let p = [[1e-4, 0.0, 0.0], [0.0, 4e-4, 0.0], [0.0, 0.0, 1e-4]];
+        let zero = [[0.0f32; 3]; 3];
+        let f2 = r.floor_m * r.floor_m;
+        let t = r.reported(&p, &zero, Quality::Tracking);
+        assert!((t[0][0] - (1e-4 + f2)).abs() < 1e-9 && (t[1][1] - (4e-4 + f2)).abs() < 1e-9);
+        // Doubting: never smaller than the last one grown, whatever the particles say.
+        let tight = [[1e-8, 0.0, 0.0], [0.0, 1e-8, 0.0], [0.0, 0.0, 1e-8]];
+        let mut last = t;
+        for _ in 0..10 {
+            let u = r.reported(&tight, &last, Quality::Uncertain);
+            assert!(
+                u[0][0] >= last[0][0] * r.growth * 0.999_99,
+                "{u:?} after {last:?}"
+            );
+            last = u;
+        }
+        let l = r.reported(&tight, &last, Quality::Lost);
+        assert!(l[1][1] >= last[1][1] * r.lost_growth * 0.999_99);
+        // Tracking again: back to the particles plus the floor.
+        assert_eq!(r.reported(&p, &l, Quality::Tracking), t);
+        // Bounded, and finite for a NaN input.
+        let mut big = l;
+        for _ in 0..200 {
+            big = r.reported(&tight, &big, Quality::Lost);
+        }
+        assert!(big[0][0] <= r.max_var_m2 && big[1][1] <= r.max_var_m2 && big[0][0] > 0.0);
+        let nan = [[f32::NAN; 3]; 3];
+        let n = r.reported(&nan, &zero, Quality::Lost);
+        assert!(n.iter().flatten().all(|v| v.is_finite()));
+        // The particles' own when asked.
+        assert_eq!(
+            ReportedCovariance::PARTICLES.reported(&p, &l, Quality::Tracking),
+            p
+        );
+        assert!(!ReportedCovariance { growth: 0.5, ..r }.validate());
     }
 }

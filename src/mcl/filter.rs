@@ -8,13 +8,14 @@ use super::kld::BinCount;
 use super::motion::{sample_words, OdometryStep};
 use super::quality::{Quality, QualityReport, QualityState};
 use super::resample::{apply_counts, low_variance_counts_of_total};
-use super::unexplained::{classify, Unexplained};
+use super::unexplained::{classify, scan_fit, ScanFit, Unexplained};
 use crate::field::FreeSpace;
 use crate::gaussian::{standard_normal_pair, uniform_f32};
 use crate::math;
 use crate::math::fast::exp_nonpositive;
 use crate::model::SensorModel;
 use crate::pose::{wrap_angle, Pose};
+use crate::raycast::RayCaster;
 use crate::scan::{BeamLayout, Scan};
 use crate::tempered::TemperedScan;
 use rand_core::Rng;
@@ -86,6 +87,8 @@ pub struct Mcl<'p, const N: usize> {
     /// The quality signal's averages and its last report.
     quality_state: QualityState,
     quality: QualityReport,
+    /// The covariance reported with the last update ([`Update::covariance`]).
+    reported: [[f32; 3]; 3],
     /// Expansion resets in a row; updates in a row reported `Tracking`, and `Lost`.
     expansions: u16,
     tracking_streak: u16,
@@ -124,6 +127,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
             retry_sigma_theta_rad: 0.0,
             quality_state: QualityState::NEW,
             quality: QualityReport::default(),
+            reported: [[0.0; 3]; 3],
             expansions: 0,
             tracking_streak: 0,
             lost_streak: 0,
@@ -157,6 +161,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         self.ln_level = f32::NEG_INFINITY;
         self.quality_state = QualityState::NEW;
         self.quality = QualityReport::default();
+        self.reported = [[0.0; 3]; 3];
         self.expansions = 0;
         self.tracking_streak = 0;
         self.lost_streak = 0;
@@ -246,6 +251,12 @@ impl<'p, const N: usize> Mcl<'p, N> {
     /// where the next update classifies the beams.
     pub fn estimate(&self) -> &Estimate {
         &self.estimate
+    }
+
+    /// The covariance reported with the last update ([`Update::covariance`]; all zeros before
+    /// the first update after an initialization).
+    pub fn reported_covariance(&self) -> &[[f32; 3]; 3] {
+        &self.reported
     }
 
     /// The quality signal of the last update ([`QualityReport`]; the default, `Uncertain`
@@ -425,13 +436,11 @@ impl<'p, const N: usize> Mcl<'p, N> {
         let per_beam = 1.0 / weigh.prepared().len() as f32;
         // The quality signal's explained share: one pass over the beams at the estimate.
         let prepared = whole.prepared();
-        let share = 1.0 / prepared.len() as f32;
         let near_m = self.config.quality.explained_sigmas * prepared.field().params().sigma_hit_m();
-        let explain = |p: &Pose| {
-            let mut explained = 0u32;
-            prepared.score_with(p, |_, d| explained += u32::from(d <= near_m));
-            Some(explained as f32 * share)
-        };
+        // Casting separates readings in front of mapped walls from readings through them (a
+        // field too coarse to cast counts every unexplained beam as through).
+        let caster = RayCaster::new(*prepared.field().view()).ok();
+        let explain = |p: &Pose| Some(scan_fit(prepared, p, near_m, caster.as_ref()));
         // The prepared scan scores a NaN or infinite pose NaN itself: no check per particle.
         let mut up = self.update_scaled::<false, _, _, _>(
             |p| weigh.score(p).log_likelihood,
@@ -498,7 +507,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
     fn update_scaled<
         const CHECK: bool,
         F: FnMut(&Pose) -> f32,
-        E: FnMut(&Pose) -> Option<f32>,
+        E: FnMut(&Pose) -> Option<ScanFit>,
         R: Rng + ?Sized,
     >(
         &mut self,
@@ -552,7 +561,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
                 }
                 if let Some(r) = self.config.resetting {
                     let lost = match explained {
-                        Some(e) => e < r.expand_below,
+                        Some(fit) => self.config.quality.explained_share(&fit) < r.expand_below,
                         None => {
                             report.ln_beam_slow - report.ln_beam_fast
                                 > self.config.quality.lost_drop_nats
@@ -574,6 +583,11 @@ impl<'p, const N: usize> Mcl<'p, N> {
         };
         let (ln_avg, report) = first.unwrap_or((rw.ln_total, QualityReport::default()));
         self.quality = report;
+        self.reported =
+            self.config
+                .covariance
+                .reported(&rw.estimate.covariance, &self.reported, report.state);
+        let covariance = self.reported;
         let mut random_fraction = self.track_likelihood(ln_avg * recovery_scale);
         let mut reset = false;
         if let Some(r) = self.config.resetting {
@@ -646,6 +660,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
                 );
                 return Ok(Update {
                     estimate: rw.estimate,
+                    covariance,
                     ln_avg_likelihood: ln_avg,
                     random_fraction,
                     resampled: true,
@@ -680,6 +695,7 @@ impl<'p, const N: usize> Mcl<'p, N> {
         }
         Ok(Update {
             estimate: rw.estimate,
+            covariance,
             ln_avg_likelihood: ln_avg,
             random_fraction,
             resampled: due,
@@ -1063,11 +1079,11 @@ mod tests {
     fn eighteen_bytes_per_particle() {
         assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
         let fixed = core::mem::size_of::<Mcl<'_, 1000>>();
-        // 336 on a 64-bit host: the quality signal's averages (the slow average of the
-        // explained share included), the recovery's counters, the adaptive motion noise's and
-        // KLD sampling's parameters, the noise scale, the reset in progress; nothing per
-        // particle.
-        assert!(fixed <= 336, "{fixed}");
+        // 408 on a 64-bit host: the quality signal's averages (the slow average of the
+        // explained share included) and its last scan fit, the recovery's counters, the last
+        // reported covariance and how it is made, the adaptive motion noise's and KLD
+        // sampling's parameters, the noise scale, the reset in progress; nothing per particle.
+        assert!(fixed <= 408, "{fixed}");
         println!("Mcl: {fixed} bytes besides the particles");
     }
 

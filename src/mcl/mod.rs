@@ -47,7 +47,7 @@ pub use adaptive::{AdaptiveNoise, MAX_NOISE_SCALE};
 pub use config::{
     MclConfig, MclError, Particles, Update, MAX_PARTICLES, MAX_RETRY_SCALE, RETRY_LEVEL_RATE,
 };
-pub use estimate::{diagonal_variances, Estimate};
+pub use estimate::{diagonal_variances, Estimate, ReportedCovariance};
 pub use filter::{Mcl, ESTIMATE_HALF_ANGLE_RAD, ESTIMATE_RADIUS_M};
 pub use kld::Kld;
 pub use motion::{
@@ -56,4 +56,4 @@ pub use motion::{
 };
 pub use quality::{Quality, QualityReport, QualityThresholds, Resetting};
 pub use rng::{SplitMix64, XorShift64};
-pub use unexplained::Unexplained;
+pub use unexplained::{ScanFit, Unexplained};

@@ -42,6 +42,8 @@
 //! The thresholds were chosen on the first two thirds of the Intel lab log and checked on the
 //! last third (docs/localization.md, `host-tests/tests/intel_quality.rs`).
 
+use super::unexplained::ScanFit;
+
 /// The rate of the averaged explained share (per update): `e ← e + r·(eₖ − e)`.
 pub const EXPLAINED_RATE: f32 = 0.5;
 /// The fast average's rate of the likelihood per beam (per update).
@@ -107,6 +109,15 @@ pub struct QualityThresholds {
     /// Without an explained share: drop (nats, as `uncertain_drop_nats`) above which the state
     /// is `Lost`.
     pub lost_drop_nats: f32,
+    /// The largest share of a scan's beams (0 to 1, below 1; 0: off) set aside as clutter
+    /// before the explained share is taken: beams the map does not explain but whose ray
+    /// reaches the endpoint without crossing a mapped wall ([`ScanFit::short`]: something
+    /// unmapped in front of the wall, near the sensor). The share that decides is then
+    /// `explained / (1 − min(short, clutter_share))` ([`QualityThresholds::explained_share`]):
+    /// a scan half hidden by unmapped things near the laser is judged by the half the map
+    /// should explain, while readings through mapped walls (a pose that is off) and clutter
+    /// beyond the allowance still count against it.
+    pub clutter_share: f32,
 }
 
 impl QualityThresholds {
@@ -124,7 +135,19 @@ impl QualityThresholds {
         concentration: 0.5,
         uncertain_drop_nats: 0.3,
         lost_drop_nats: 1.0,
+        clutter_share: 0.3,
     };
+
+    /// The explained share that decides (0 to 1): `fit.explained / (1 − min(fit.short,
+    /// clutter_share))`, clamped to `[0, 1]` (`fit.explained` itself with `clutter_share` 0).
+    pub fn explained_share(&self, fit: &ScanFit) -> f32 {
+        let rest = 1.0 - fit.short.min(self.clutter_share).max(0.0);
+        if rest > 0.0 {
+            (fit.explained / rest).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }
 
     /// True when every value is in range: shares in `[0, 1]` with `lost ≤ tracking`, the rest
     /// positive (not NaN), `uncertain_drop ≤ lost_drop`.
@@ -145,6 +168,7 @@ impl QualityThresholds {
             && pos(self.uncertain_drop_nats)
             && pos(self.lost_drop_nats)
             && self.uncertain_drop_nats <= self.lost_drop_nats
+            && (0.0..1.0).contains(&self.clutter_share)
     }
 }
 
@@ -163,11 +187,15 @@ pub struct QualityReport {
     pub state: Quality,
     /// A score in `[0, 1]` (1 best): the averaged explained share, or `1 − drop` without it.
     pub score: f32,
-    /// Share of this scan's beams the map explains at the estimate (0 to 1); NaN when the
-    /// update had no scan to measure it on (a model or closure update).
+    /// Share of this scan's beams the map explains at the estimate (0 to 1), clutter set aside
+    /// ([`QualityThresholds::explained_share`]); NaN when the update had no scan to measure it
+    /// on (a model or closure update).
     pub explained: f32,
     /// Its average over the updates (rate [`EXPLAINED_RATE`]); NaN before the first measured.
     pub explained_avg: f32,
+    /// How this scan fits the map at the estimate, before clutter is set aside ([`ScanFit`]:
+    /// all NaN without a scan).
+    pub fit: ScanFit,
     /// This update's likelihood per beam, `ln w_avg / beams`, nats.
     pub ln_beam: f32,
     /// Its fast average (rate [`LIKELIHOOD_FAST_RATE`]), nats.
@@ -207,7 +235,7 @@ impl QualityState {
         &mut self,
         t: &QualityThresholds,
         ln_beam: f32,
-        explained: Option<f32>,
+        fit: Option<ScanFit>,
         covariance: &[[f32; 3]; 3],
         concentration: f32,
     ) -> QualityReport {
@@ -222,6 +250,7 @@ impl QualityState {
         };
         self.fast = follow(self.fast, ln_beam, LIKELIHOOD_FAST_RATE);
         self.slow = follow(self.slow, ln_beam, LIKELIHOOD_SLOW_RATE);
+        let explained = fit.map(|f| t.explained_share(&f));
         let e = explained.unwrap_or(f32::NAN);
         self.explained_avg = follow(self.explained_avg, e, EXPLAINED_RATE);
         self.explained_slow = follow(self.explained_slow, e, EXPLAINED_SLOW_RATE);
@@ -275,6 +304,11 @@ impl QualityState {
             score,
             explained: e,
             explained_avg: self.explained_avg,
+            fit: fit.unwrap_or(ScanFit {
+                explained: f32::NAN,
+                short: f32::NAN,
+                through: f32::NAN,
+            }),
             ln_beam,
             ln_beam_fast: self.fast,
             ln_beam_slow: self.slow,
@@ -387,6 +421,15 @@ impl Default for Resetting {
 mod tests {
     use super::*;
 
+    /// A fit with share `e` explained and the rest through walls (no clutter).
+    fn fit(e: f32) -> Option<ScanFit> {
+        Some(ScanFit {
+            explained: e,
+            short: 0.0,
+            through: 1.0 - e,
+        })
+    }
+
     const TIGHT: [[f32; 3]; 3] = [[1e-4, 0.0, 0.0], [0.0, 1e-4, 0.0], [0.0, 0.0, 1e-4]];
 
     #[test]
@@ -420,33 +463,74 @@ mod tests {
         let t = QualityThresholds::DEFAULT;
         let mut q = QualityState::NEW;
         for _ in 0..5 {
-            let r = q.observe(&t, -1.0, Some(0.95), &TIGHT, 1.0);
+            let r = q.observe(&t, -1.0, fit(0.95), &TIGHT, 1.0);
             assert_eq!(r.state, Quality::Tracking);
             assert!((r.score - 0.95).abs() < 1e-3);
         }
         // One scan the map barely explains: the average dips, one update meets a Lost
         // condition, reported Uncertain (hysteresis).
-        let r = q.observe(&t, -1.0, Some(0.0), &TIGHT, 1.0);
+        let r = q.observe(&t, -1.0, fit(0.0), &TIGHT, 1.0);
         assert_eq!(r.state, Quality::Uncertain, "{r:?}");
-        let r = q.observe(&t, -1.0, Some(0.95), &TIGHT, 1.0);
+        let r = q.observe(&t, -1.0, fit(0.95), &TIGHT, 1.0);
         assert_ne!(r.state, Quality::Lost, "{r:?}");
         // A lasting loss.
         let mut last = Quality::Tracking;
         for _ in 0..4 {
-            last = q.observe(&t, -3.0, Some(0.1), &TIGHT, 1.0).state;
+            last = q.observe(&t, -3.0, fit(0.1), &TIGHT, 1.0).state;
         }
         assert_eq!(last, Quality::Lost);
         // A wide cloud is at best uncertain.
         let mut q = QualityState::NEW;
         let wide = [[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1e-4]];
         assert_eq!(
-            q.observe(&t, -1.0, Some(0.95), &wide, 1.0).state,
+            q.observe(&t, -1.0, fit(0.95), &wide, 1.0).state,
             Quality::Uncertain
         );
         assert_eq!(
-            q.observe(&t, -1.0, Some(0.95), &TIGHT, 0.2).state,
+            q.observe(&t, -1.0, fit(0.95), &TIGHT, 0.2).state,
             Quality::Uncertain
         );
+    }
+
+    #[test]
+    fn clutter_is_set_aside_up_to_its_share() {
+        let t = QualityThresholds::DEFAULT;
+        let fit = |explained: f32, short: f32| ScanFit {
+            explained,
+            short,
+            through: 1.0 - explained - short,
+        };
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        // Half the scan hidden by clutter in front of the walls: 0.3 of it set aside.
+        assert!(close(t.explained_share(&fit(0.45, 0.55)), 0.45 / 0.7));
+        // Readings through walls are not set aside.
+        assert!(close(t.explained_share(&fit(0.45, 0.0)), 0.45));
+        // Beyond the allowance (0.3) short readings count against the pose.
+        assert!(close(t.explained_share(&fit(0.14, 0.86)), 0.2));
+        let off = QualityThresholds {
+            clutter_share: 0.0,
+            ..t
+        };
+        assert!(close(off.explained_share(&fit(0.45, 0.55)), 0.45));
+        assert!(!QualityThresholds {
+            clutter_share: 1.0,
+            ..t
+        }
+        .validate());
+        // The clutter scans of the real Intel odometry (35–50 % explained, the rest short) do
+        // not make a tracked filter Lost; without the allowance they do.
+        for (thresholds, lost) in [(t, false), (off, true)] {
+            let mut q = QualityState::NEW;
+            for _ in 0..20 {
+                q.observe(&thresholds, -1.0, Some(fit(0.95, 0.0)), &TIGHT, 1.0);
+            }
+            let mut any = false;
+            for _ in 0..6 {
+                let r = q.observe(&thresholds, -1.2, Some(fit(0.37, 0.62)), &TIGHT, 1.0);
+                any |= r.state == Quality::Lost;
+            }
+            assert_eq!(any, lost, "clutter_share {}", thresholds.clutter_share);
+        }
     }
 
     #[test]

@@ -129,6 +129,65 @@ pub(crate) fn classify<const S: usize>(
     removed
 }
 
+/// How one scan fits the map with the robot at one pose, as shares of the kept beams (each 0
+/// to 1, summing to 1 over the three): the quality signal's input
+/// ([`QualityThresholds::clutter_share`](super::QualityThresholds::clutter_share)).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ScanFit {
+    /// Beams whose endpoint lies within the explained distance of an obstacle.
+    pub explained: f32,
+    /// Beams not explained whose ray reaches the endpoint without crossing a mapped wall:
+    /// something unmapped in front of the map's wall (clutter, people), or a pose that is off.
+    pub short: f32,
+    /// Beams not explained whose ray crosses a mapped wall before its endpoint (a reading
+    /// through a wall: an opened door, a map error, or a pose that is off). Without a ray
+    /// caster for the field, every beam not explained counts here.
+    pub through: f32,
+}
+
+/// The fit of `scan` with the robot at `pose`: a beam is explained when its endpoint lies
+/// within `near_m` (metres) of an obstacle; the others are cast (one ray each, up to the
+/// measured range) and counted short or through ([`ScanFit`]). Without a caster (`None`: the
+/// field's steps are too coarse to cast) every unexplained beam counts as through. An empty
+/// scan or a pose that is not finite gives all zeros.
+pub(crate) fn scan_fit<const S: usize>(
+    scan: &PreparedScan<'_, S>,
+    pose: &Pose,
+    near_m: f32,
+    caster: Option<&RayCaster<'_>>,
+) -> ScanFit {
+    let n = scan.len();
+    if n == 0 || !pose.is_finite() {
+        return ScanFit::default();
+    }
+    let trig = crate::math::sin_cos(pose.theta_rad);
+    let (sx, sy) = scan.sensor_at(pose);
+    let (mut explained, mut short) = (0u32, 0u32);
+    scan.score_with(pose, |j, d| {
+        if d <= near_m {
+            explained += 1;
+        } else if let Some(c) = caster {
+            let reaches = scan.endpoint_at(pose, trig, j).is_some_and(|(ex, ey)| {
+                let (dx, dy) = (ex - sx, ey - sy);
+                let r = crate::math::sqrt(dx * dx + dy * dy);
+                // A wall crossed before the endpoint lies at least `near_m` before it (the
+                // endpoint is farther than that from every obstacle): half is the margin.
+                r > 0.0 && c.cast_dir(sx, sy, dx / r, dy / r, r) > r - 0.5 * near_m
+            });
+            short += u32::from(reaches);
+        }
+    });
+    let share = 1.0 / n as f32;
+    let explained = explained as f32 * share;
+    let short = short as f32 * share;
+    ScanFit {
+        explained,
+        short,
+        through: (1.0 - explained - short).max(0.0),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -212,6 +271,47 @@ mod tests {
             classify_scan(|i, t| if i < 20 { 1.0 } else { t }, &all).0,
             20
         );
+    }
+
+    /// [`scan_fit`] of the room scan, changed by `change`, at the centre.
+    fn fit_of(change: impl Fn(usize, f32) -> f32) -> ScanFit {
+        let blob = room();
+        let view = FieldView::parse(&blob).unwrap();
+        let params = LikelihoodParams::new(0.95, 0.05, 0.05, 10.0).unwrap();
+        let field = LikelihoodField::new(view, params);
+        let step = core::f32::consts::PI / 18.0;
+        let layout = BeamLayout::<36>::uniform(0.0, step, 36, 10.0, SensorMount::CENTERED).unwrap();
+        let ranges: Vec<f32> = (0..36)
+            .map(|i| {
+                let a = i as f32 * step;
+                change(i, 1.95 / a.cos().abs().max(a.sin().abs()))
+            })
+            .collect();
+        let scan = Scan::<36>::from_ranges(&ranges).unwrap();
+        let prepared = field.prepare(&layout, &scan);
+        let caster = RayCaster::new(view).unwrap();
+        scan_fit(&prepared, &Pose::new(2.0, 2.0, 0.0), 0.15, Some(&caster))
+    }
+
+    #[test]
+    fn scan_fit_tells_clutter_in_front_from_readings_through_walls() {
+        let share = |k: usize| k as f32 / 36.0;
+        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
+        let f = fit_of(|_, t| t);
+        assert!(
+            close(f.explained, 1.0) && close(f.short, 0.0) && close(f.through, 0.0),
+            "{f:?}"
+        );
+        // 9 beams stopped 1 m out by something unmapped: short; 4 beams 1 m beyond the wall:
+        // through.
+        let f = fit_of(|i, t| match i {
+            0..=8 => 1.0,
+            20..=23 => t + 1.0,
+            _ => t,
+        });
+        assert!(close(f.explained, share(23)), "{f:?}");
+        assert!(close(f.short, share(9)), "{f:?}");
+        assert!(close(f.through, share(4)), "{f:?}");
     }
 
     #[test]

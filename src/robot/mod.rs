@@ -919,7 +919,12 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             flags = flags | EstimateFlags::ODOMETRY_STALE;
             self.counters.stale_odometry = self.counters.stale_odometry.wrapping_add(1);
         }
-        let e = *self.mcl.estimate();
+        // The reported covariance (the particles' inflated, growing while not tracking), not
+        // the particles' own: consumers weigh the pose by it.
+        let e = crate::mcl::Estimate {
+            covariance: update.covariance,
+            ..*self.mcl.estimate()
+        };
         if self.global && settled(&self.mcl, &e.pose) {
             self.global = false;
         }

@@ -5,7 +5,7 @@ use crate::track::{RunResult, TrackError, TrackInput};
 use beamfield::Pose;
 use std::path::Path;
 
-/// Draws the logged (blue) and estimated (green) trajectories over the rendered field, one pixel
+/// Draws the true (blue: the logged poses, or the reference poses joined) and estimated (green) trajectories over the rendered field, one pixel
 /// per cell, north up.
 pub fn draw_track(
     path: &Path,
@@ -48,7 +48,8 @@ pub fn draw_track(
             }
         }
     };
-    for pair in input.logged[..scans].windows(2) {
+    let truth: Vec<Pose> = (r.start..scans).filter_map(|k| input.truth(k)).collect();
+    for pair in truth.windows(2) {
         line(to_px(&pair[0]), to_px(&pair[1]), [30, 80, 230]);
     }
     for pair in r.estimates.windows(2) {

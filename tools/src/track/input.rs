@@ -19,14 +19,37 @@ pub struct TrackInput {
     /// The scans' ranges (each made a [`Scan`](beamfield::Scan) when it is scored: a `Scan<MAX_BEAMS>` holds
     /// 4.3 KB whatever its beams, so a log of many short scans is not multiplied in memory).
     pub scans: Vec<Vec<f32>>,
-    /// The logged (corrected) laser poses: the truth.
+    /// The log's laser poses, one per scan: the truth, unless [`TrackInput::reference`] is
+    /// given (then they are what the log holds, e.g. integrated odometry, and not used as truth).
     pub logged: Vec<Pose>,
     /// Recorded odometry, one pose per scan in the odometry frame (a bag's `/odom`, an
     /// `--odometry` file); `None`: the run synthesizes it from the logged poses.
     pub odometry: Option<Vec<Pose>>,
+    /// Reference poses at some scans (`--reference`, e.g. a raw-odometry log's anchors), one
+    /// entry per scan, `None` where there is none: when given, the truth is known only there —
+    /// a run starts at the first one and is scored at them alone. `None`: every logged pose is
+    /// the truth.
+    pub reference: Option<Vec<Option<Pose>>>,
 }
 
 impl TrackInput {
+    /// The truth at scan `k`: the reference pose there when a reference is given (`None`
+    /// between reference scans), else the logged pose.
+    pub fn truth(&self, k: usize) -> Option<Pose> {
+        match &self.reference {
+            Some(r) => r.get(k).copied().flatten(),
+            None => self.logged.get(k).copied(),
+        }
+    }
+
+    /// The first scan with a truth (0 without a reference; `None` when the reference has none).
+    pub fn first_truth(&self) -> Option<usize> {
+        match &self.reference {
+            Some(r) => r.iter().position(Option::is_some),
+            None => (!self.logged.is_empty()).then_some(0),
+        }
+    }
+
     /// The field view and the free space after it, if any.
     ///
     /// # Errors
@@ -125,6 +148,7 @@ pub fn load_with_max_range(
         scans,
         logged,
         odometry: None,
+        reference: None,
     };
     input.views()?;
     Ok(input)

@@ -141,6 +141,7 @@ pub fn load_bag(
         scans,
         logged,
         odometry: Some(odometry),
+        reference: None,
     };
     input.views()?;
     Ok((input, summary))
@@ -208,4 +209,93 @@ pub fn read_odometry_file(path: &Path, scans: usize) -> Result<Vec<Pose>, TrackE
             })
         })
         .collect()
+}
+
+/// Reads reference poses for a log (`--reference`): one line per reference scan, whitespace-
+/// or tab-separated, `#` starts a comment. Either a header line naming the columns — the scan
+/// `index` (0-based FLASER index), and `ref_x ref_y ref_theta` or `x y theta` (metres, metres,
+/// radians, in the map's frame); other columns are ignored, as in the raw-odometry log's
+/// `anchors.tsv` — or no header and `index x y θ` on every line. Returns one entry per scan of
+/// the log (`scans` of them), `None` where there is no reference pose.
+///
+/// # Errors
+/// [`TrackError::Usage`] naming the line of a malformed, duplicated or out-of-range entry, a
+/// header without the columns, or a file with no reference pose at all.
+pub fn read_reference_file(path: &Path, scans: usize) -> Result<Vec<Option<Pose>>, TrackError> {
+    let text = crate::input::limits::read_regular_file(
+        path,
+        crate::input::limits::MAX_FIELD_FILE_BYTES,
+        "reference file",
+    )
+    .map_err(TrackError::Read)?;
+    let text = String::from_utf8(text)
+        .map_err(|_| usage(format!("--reference {}: not UTF-8 text", path.display())))?;
+    let mut poses: Vec<Option<Pose>> = vec![None; scans];
+    // Column positions of index, x, y, θ: from the header, or 0..4 without one.
+    let mut columns: Option<[usize; 4]> = None;
+    let mut found = 0usize;
+    for (i, line) in text.lines().enumerate() {
+        let line = line.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let bad = |why: &str| {
+            usage(format!(
+                "--reference {} line {}: {why}",
+                path.display(),
+                i + 1
+            ))
+        };
+        let f: Vec<&str> = line.split_whitespace().collect();
+        let cols = match columns {
+            Some(c) => c,
+            None if f[0].parse::<f64>().is_err() => {
+                let find = |names: &[&str]| f.iter().position(|t| names.contains(t));
+                let c = [
+                    find(&["index", "scan"]),
+                    find(&["ref_x", "x"]),
+                    find(&["ref_y", "y"]),
+                    find(&["ref_theta", "theta"]),
+                ];
+                let [Some(a), Some(b), Some(c), Some(d)] = c else {
+                    return Err(bad(
+                        "a header needs the columns index, ref_x (or x), ref_y (or y) and ref_theta (or theta)",
+                    ));
+                };
+                columns = Some([a, b, c, d]);
+                continue;
+            }
+            None => {
+                columns = Some([0, 1, 2, 3]);
+                [0, 1, 2, 3]
+            }
+        };
+        let field = |c: usize| f.get(c).copied().ok_or_else(|| bad("too few columns"));
+        let k: usize = field(cols[0])?
+            .parse()
+            .map_err(|_| bad("the index is not a scan number"))?;
+        let mut v = [0f32; 3];
+        for (slot, &c) in v.iter_mut().zip(&cols[1..]) {
+            *slot = field(c)?
+                .parse::<f32>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad("x, y and θ must be finite numbers"))?;
+        }
+        let slot = poses
+            .get_mut(k)
+            .ok_or_else(|| bad(&format!("scan {k} is past the log's {scans} scans")))?;
+        if slot.is_some() {
+            return Err(bad(&format!("scan {k} has a pose already")));
+        }
+        *slot = Some(Pose::new(v[0], v[1], v[2]));
+        found += 1;
+    }
+    if found == 0 {
+        return Err(usage(format!(
+            "--reference {}: no reference pose in it",
+            path.display()
+        )));
+    }
+    Ok(poses)
 }

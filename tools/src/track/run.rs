@@ -3,7 +3,7 @@
 use crate::cmd::scored_log::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::mcl::{
-    AdaptiveNoise, Kld, Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles,
+    AdaptiveNoise, Kld, Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, Quality,
     Resetting, SplitMix64, Unexplained,
 };
 use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, Tempered};
@@ -62,15 +62,72 @@ pub struct RunOptions {
     pub kld: Option<(u16, u16)>,
 }
 
+/// One update of a run, as `--json` reports it: where the filter put the robot, how sure it
+/// said it was, and (at scans with a truth) how far off it was.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct ScanRecord {
+    /// The scan (0-based FLASER index of the log).
+    pub scan: usize,
+    /// The estimate: x, y (metres), heading (radians).
+    pub pose: [f32; 3],
+    /// The reported covariance (`Update::covariance`): xx, xy, yy (m²), θθ (rad²).
+    pub covariance: [f32; 4],
+    /// The particles' covariance (`Estimate::covariance`): xx, xy, yy (m²), θθ (rad²).
+    pub particle_covariance: [f32; 4],
+    /// The effective sample size of the weights the estimate came from.
+    pub ess: f32,
+    /// The quality signal's state: `tracking`, `uncertain` or `lost`.
+    pub quality: &'static str,
+    /// The scan's share of beams the map explains at the estimate, clutter set aside (0 to 1,
+    /// the quality signal's input; NaN, as null, when the update was skipped).
+    pub explained: f32,
+    /// How the scan fits the map at the estimate, shares of its beams: explained, short of a
+    /// mapped wall and not explained, through a mapped wall (`beamfield::mcl::ScanFit`).
+    pub fit: [f32; 3],
+    /// The likelihood per beam, `ln w_avg / beams` (nats).
+    pub ln_beam: f32,
+    /// The estimate's spread (metres, radians) and concentration (0 to 1), as the quality
+    /// signal saw them.
+    pub spread: [f32; 3],
+    /// Expansion resetting widened the cloud at this update.
+    pub expanded: bool,
+    /// This update's resampling was a free-space reset.
+    pub reset: bool,
+    /// The update was skipped (empty scan) or discarded (all particles impossible).
+    pub skipped: bool,
+    /// The truth at this scan: x, y (metres), heading (radians); `None` where there is none.
+    pub truth: Option<[f32; 3]>,
+    /// Translation error against the truth, metres (`None` where there is no truth).
+    pub error_m: Option<f64>,
+    /// Heading error against the truth, degrees (`None` where there is no truth).
+    pub heading_error_deg: Option<f64>,
+}
+
+/// The name of a quality state in reports.
+pub fn quality_name(q: Quality) -> &'static str {
+    match q {
+        Quality::Tracking => "tracking",
+        Quality::Uncertain => "uncertain",
+        Quality::Lost => "lost",
+    }
+}
+
 /// The outcome of one run.
 #[derive(Clone, Debug)]
 pub struct RunResult {
-    /// The estimate after each scan.
+    /// The first scan run (0, or the first reference scan).
+    pub start: usize,
+    /// The estimate after each scan run (scans `start..`).
     pub estimates: Vec<Pose>,
-    /// Translation error per scan, metres.
+    /// The scans at which the errors below were measured (every scan run, or the reference
+    /// scans), in order.
+    pub scored: Vec<usize>,
+    /// Translation error per scored scan, metres.
     pub trans_err_m: Vec<f64>,
-    /// Heading error per scan, degrees.
+    /// Heading error per scored scan, degrees.
     pub heading_err_deg: Vec<f64>,
+    /// Every update of the run (scans `start..`).
+    pub per_scan: Vec<ScanRecord>,
     /// Scans whose update was skipped (empty scan) or discarded (all particles impossible).
     pub skipped: usize,
     /// Resamplings.
@@ -84,6 +141,26 @@ pub struct RunResult {
     pub noise_scales: Vec<f32>,
     /// The particles in use after each scan.
     pub particles_in_use: Vec<usize>,
+    /// Free-space resets (`--resetting`).
+    pub resets: usize,
+}
+
+/// The quality table of a run: its updates at the scored scans, by the state the quality
+/// signal reported and by whether the estimate was within [`LOST_M`] of the truth.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct QualityTable {
+    /// `Tracking` while within [`LOST_M`].
+    pub tracking_within: usize,
+    /// `Tracking` while more than [`LOST_M`] off.
+    pub tracking_off: usize,
+    /// `Uncertain` while within.
+    pub uncertain_within: usize,
+    /// `Uncertain` while off.
+    pub uncertain_off: usize,
+    /// `Lost` while within (a false alarm).
+    pub lost_within: usize,
+    /// `Lost` while off.
+    pub lost_off: usize,
 }
 
 /// Summary figures of a run.
@@ -105,12 +182,17 @@ pub struct Metrics {
     /// The run converged and was later more than 0.5 m off (at a scan after the 20 that
     /// made it converge).
     pub lost_after_convergence: bool,
+    /// Scans at which the errors were measured.
+    pub scored_scans: usize,
+    /// The quality table over the scored scans.
+    pub quality: QualityTable,
 }
 
 impl RunResult {
-    /// The summary, over scans `from..` (the RMSE and fractions over all scans; convergence
-    /// counted from `from`).
+    /// The summary over the scored scans (the RMSE and fractions over all of them; convergence
+    /// counted in scored scans from the first at or after scan `from`).
     pub fn metrics(&self, from: usize) -> Metrics {
+        let from = self.scored.partition_point(|&s| s < from);
         let n = self.trans_err_m.len().max(1) as f64;
         let trans_rmse_m = (self.trans_err_m.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
         let heading_rmse_deg = (self.heading_err_deg.iter().map(|e| e * e).sum::<f64>() / n).sqrt();
@@ -143,7 +225,28 @@ impl RunResult {
                 .skip(from + c + CONVERGED_SCANS)
                 .any(|&e| e > LOST_M)
         });
+        let mut quality = QualityTable::default();
+        for (&scan, &e) in self.scored.iter().zip(&self.trans_err_m) {
+            let Some(rec) = scan
+                .checked_sub(self.start)
+                .and_then(|i| self.per_scan.get(i))
+            else {
+                continue;
+            };
+            let off = e > LOST_M;
+            let slot = match (rec.quality, off) {
+                ("tracking", false) => &mut quality.tracking_within,
+                ("tracking", true) => &mut quality.tracking_off,
+                ("lost", false) => &mut quality.lost_within,
+                ("lost", true) => &mut quality.lost_off,
+                (_, false) => &mut quality.uncertain_within,
+                (_, true) => &mut quality.uncertain_off,
+            };
+            *slot += 1;
+        }
         Metrics {
+            scored_scans: self.scored.len(),
+            quality,
             lost_after_convergence,
             trans_rmse_m,
             heading_rmse_deg,
@@ -262,7 +365,23 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
     let mut mcl = Mcl::new(&mut store, config).map_err(TrackError::Filter)?;
     let mut rng = SplitMix64::new(o.seed);
     let mut kidnap_rng = SplitMix64::new(o.seed ^ KIDNAP_SEED_XOR);
-    let first = input.logged.first().copied().unwrap_or_default();
+    let n = o.scans.min(input.scans.len());
+    // With a reference, the run starts at its first pose (the truth is unknown before it).
+    let (start, first) = match input.first_truth().and_then(|k| Some((k, input.truth(k)?))) {
+        Some((k, p)) if k < n => (k, p),
+        _ => {
+            return Err(usage(format!(
+                "no reference pose within the {n} scans run: nothing to start from or score against"
+            )))
+        }
+    };
+    if let Some(k) = o.kidnap {
+        if k <= start || input.truth(k).is_none() {
+            return Err(usage(format!(
+                "--kidnap {k}: must be a scan after the first with a reference pose ({start}), and have one"
+            )));
+        }
+    }
     match (o.init, &free) {
         (Init::Global, Some(f)) => mcl.init_uniform(o.particles, f, &mut rng),
         _ => mcl.init_gaussian(
@@ -274,17 +393,20 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         ),
     }
     .map_err(TrackError::Filter)?;
-    let n = o.scans.min(input.scans.len());
     let mut out = RunResult {
-        estimates: Vec::with_capacity(n),
-        trans_err_m: Vec::with_capacity(n),
-        heading_err_deg: Vec::with_capacity(n),
+        start,
+        estimates: Vec::with_capacity(n - start),
+        scored: Vec::new(),
+        trans_err_m: Vec::new(),
+        heading_err_deg: Vec::new(),
+        per_scan: Vec::with_capacity(n - start),
         skipped: 0,
         resamplings: 0,
         injected: 0,
         retries: 0,
         noise_scales: Vec::with_capacity(n),
         particles_in_use: Vec::with_capacity(n),
+        resets: 0,
     };
     let progress = std::io::stderr().is_terminal();
     let odom = match &input.odometry {
@@ -299,9 +421,9 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
     }
     let mut settled = Settled::default();
     let mut seen = OdometryStep::STILL;
-    for k in 0..n {
-        let truth = input.logged[k];
-        if k > 0 {
+    for k in start..n {
+        let truth = input.truth(k);
+        if k > start {
             seen = OdometryStep::between(&odom[k - 1], &odom[k])
                 .map_err(|e| usage(format!("odometry {k}: {e}")))?;
             mcl.predict(&seen, &mut rng);
@@ -313,8 +435,8 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
             free.as_ref()
         };
         if o.kidnap == Some(k) {
-            if let Some(f) = &free {
-                kidnap(&mut mcl, f, &truth, &mut kidnap_rng);
+            if let (Some(f), Some(t)) = (&free, &truth) {
+                kidnap(&mut mcl, f, t, &mut kidnap_rng);
             }
         }
         let scan = &Scan::<MAX_BEAMS>::from_ranges(&input.scans[k])
@@ -336,31 +458,64 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
                 }
             }
         };
-        let est = match result {
+        let (update, skipped) = match result {
             Ok(u) => {
                 out.resamplings += usize::from(u.resampled);
                 out.injected += u64::from(u.injected);
                 out.retries += usize::from(u.retried);
+                out.resets += usize::from(u.reset);
                 settled.observe(&u.estimate, &seen);
-                u.estimate.pose
+                (Some(u), false)
             }
             Err(MclError::EmptyScan | MclError::AllImpossible) => {
                 out.skipped += 1;
-                mcl.estimate().pose
+                (None, true)
             }
             Err(e) => return Err(TrackError::Filter(e)),
         };
-        let dx = f64::from(est.x_m - truth.x_m);
-        let dy = f64::from(est.y_m - truth.y_m);
-        out.estimates.push(est);
         out.noise_scales.push(mcl.noise_scale());
         out.particles_in_use.push(mcl.len());
-        out.trans_err_m.push(dx.hypot(dy));
-        out.heading_err_deg.push(
-            f64::from(wrap_angle(est.theta_rad - truth.theta_rad))
+        let estimate = update.map_or_else(|| *mcl.estimate(), |u| u.estimate);
+        let quality = update.map_or_else(|| *mcl.quality(), |u| u.quality);
+        let est = estimate.pose;
+        let errors = truth.map(|truth| {
+            let dx = f64::from(est.x_m - truth.x_m);
+            let dy = f64::from(est.y_m - truth.y_m);
+            let head = f64::from(wrap_angle(est.theta_rad - truth.theta_rad))
                 .abs()
-                .to_degrees(),
-        );
+                .to_degrees();
+            (dx.hypot(dy), head)
+        });
+        if let Some((e, h)) = errors {
+            out.scored.push(k);
+            out.trans_err_m.push(e);
+            out.heading_err_deg.push(h);
+        }
+        let c = &estimate.covariance;
+        let r = update.map_or_else(|| *mcl.reported_covariance(), |u| u.covariance);
+        out.per_scan.push(ScanRecord {
+            scan: k,
+            pose: [est.x_m, est.y_m, est.theta_rad],
+            covariance: [r[0][0], r[0][1], r[1][1], r[2][2]],
+            particle_covariance: [c[0][0], c[0][1], c[1][1], c[2][2]],
+            ess: estimate.ess,
+            quality: quality_name(quality.state),
+            explained: quality.explained,
+            fit: [
+                quality.fit.explained,
+                quality.fit.short,
+                quality.fit.through,
+            ],
+            ln_beam: quality.ln_beam,
+            spread: [quality.spread_m, quality.spread_rad, quality.concentration],
+            expanded: update.is_some_and(|u| u.expanded),
+            reset: update.is_some_and(|u| u.reset),
+            skipped,
+            truth: truth.map(|t| [t.x_m, t.y_m, t.theta_rad]),
+            error_m: errors.map(|e| e.0),
+            heading_error_deg: errors.map(|e| e.1),
+        });
+        out.estimates.push(est);
         if progress && (k % 50 == 0 || k + 1 == n) {
             eprint!("\rseed {}: scan {}/{n}", o.seed, k + 1);
             if k + 1 == n {

@@ -9,9 +9,9 @@ use crate::cmd::likelihood::LikelihoodArgs;
 use crate::cmd::scored_log::MAX_BEAMS;
 use crate::input::bag::Topics;
 use crate::track::{
-    field_bytes, load_bag, load_with_max_range, read_odometry_file, run_once, synthesize_odometry,
-    usage, Init, Metrics, RunOptions, TrackError, Weighting, WheelPreset, MAX_TRACK_PARTICLES,
-    MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
+    field_bytes, load_bag, load_with_max_range, read_odometry_file, read_reference_file, run_once,
+    synthesize_odometry, usage, Init, Metrics, RunOptions, TrackError, Weighting, WheelPreset,
+    MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
 };
 use clap::Args;
 use std::path::PathBuf;
@@ -24,9 +24,22 @@ pub struct TrackArgs {
     /// built with `--free-space`), or a nav2 map YAML, turned into a blob with its free space.
     #[arg(long)]
     pub field: PathBuf,
-    /// The CARMEN log (FLASER lines with corrected poses).
+    /// The CARMEN log (FLASER lines with corrected poses, or odometry: --log-poses).
     #[arg(long)]
     pub log: Option<PathBuf>,
+    /// What the log's FLASER poses are: `truth` (corrected poses: the errors are measured
+    /// against them and the odometry is synthesized or given), or `odometry` (the robot's own
+    /// odometry, e.g. `data/laser_intel_lab_raw_odometry/intel-real-odom.clf`: the filter's
+    /// odometry; needs --reference for the truth).
+    #[arg(long, value_enum, default_value_t = LogPoses::Truth, requires = "log")]
+    pub log_poses: LogPoses,
+    /// Reference poses at some scans of the log (the truth there, in the map's frame): a
+    /// table with a header naming `index` and `ref_x ref_y ref_theta` (or `x y theta`), as
+    /// `anchors.tsv`, or lines `index x y θ`. The run starts at the first reference scan,
+    /// around its pose, and errors, lost runs and the quality table are computed at the
+    /// reference scans only.
+    #[arg(long, value_name = "FILE", requires = "log")]
+    pub reference: Option<PathBuf>,
     /// A ROS 2 bag (an .mcap file or a rosbag2 directory): scans, odometry and a reference
     /// pose by topic; the odometry is the bag's (needs --reference-topic).
     #[arg(long, conflicts_with = "odometry")]
@@ -163,6 +176,15 @@ pub struct TrackArgs {
     pub output: Option<PathBuf>,
 }
 
+/// What a log's FLASER poses are (`--log-poses`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum LogPoses {
+    /// Corrected poses: the truth.
+    Truth,
+    /// The robot's odometry: the filter's input, not the truth (needs --reference).
+    Odometry,
+}
+
 fn parse_list(text: &str, what: &str, n: usize) -> Result<Vec<f32>, TrackError> {
     let v: Vec<f32> = text
         .split(',')
@@ -272,6 +294,26 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
     let (mut input, bag, odometry) = match (&args.log, &args.bag) {
         (Some(log), None) => {
             let mut input = load_with_max_range(&args.field, log, lk, args.max_range)?;
+            if let Some(path) = &args.reference {
+                input.reference = Some(read_reference_file(path, input.scans.len())?);
+            }
+            let from_log = args.log_poses == LogPoses::Odometry;
+            if from_log {
+                if args.reference.is_none() {
+                    return Err(usage(
+                        "--log-poses odometry: the log holds no truth; give --reference with poses at some scans",
+                    ));
+                }
+                if args.odometry.is_some()
+                    || args.wheel_odometry.is_some()
+                    || args.synthetic_odom_noise.is_some()
+                {
+                    return Err(usage(
+                        "--log-poses odometry: the log's poses are the odometry; --odometry, --wheel-odometry and --synthetic-odom-noise need a log of true poses",
+                    ));
+                }
+                input.odometry = Some(input.logged.clone());
+            }
             let source = match (&args.odometry, args.wheel_odometry) {
                 (Some(_), Some(_)) => {
                     return Err(usage("give at most one of --odometry and --wheel-odometry"))
@@ -300,6 +342,9 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
                         .map_or(input.scans.len(), |n| n.min(input.scans.len()));
                     input.odometry = Some(read_odometry_file(path, used)?);
                     format!("recorded ({})", path.display())
+                }
+                (None, None) if from_log => {
+                    format!("recorded (the log's poses, {})", log.display())
                 }
                 (None, None) => match &args.synthetic_odom_noise {
                     Some(text) => format!(
@@ -400,6 +445,8 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
                 r.noise_scales.iter().sum::<f32>() / r.noise_scales.len().max(1) as f32,
                 r.noise_scales.iter().copied().fold(0.0, f32::max),
             ],
+            resets: r.resets,
+            per_scan: r.per_scan.clone(),
         })
         .collect();
     Ok(TrackReport {
@@ -433,8 +480,14 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         options: o,
         output: args.output.as_ref().map(|p| p.display().to_string()),
         odometry,
+        scored: if args.reference.is_some() {
+            "reference".into()
+        } else {
+            "every scan".into()
+        },
         odometry_model: match (&args.bag, &args.odometry, args.wheel_odometry) {
             (Some(_), _, _) | (_, Some(_), _) => "recorded".into(),
+            _ if args.log_poses == LogPoses::Odometry => "recorded".into(),
             (_, _, Some(p)) => format!("wheels-{}", p.name()),
             _ => "synthetic".into(),
         },

@@ -1,6 +1,6 @@
 //! What `beamfield track` reports over its seeds ([`TrackReport`]), as text and JSON.
 
-use crate::track::{Metrics, RunOptions};
+use crate::track::{Metrics, RunOptions, ScanRecord};
 use serde::Serialize;
 use std::fmt;
 
@@ -24,6 +24,11 @@ pub struct SeedRun {
     pub noise_scale_mean_max: [f32; 2],
     /// The particles in use: mean and largest over the scans.
     pub particles_mean_max: [f32; 2],
+    /// Free-space resets.
+    pub resets: usize,
+    /// Every update: the estimate, its covariance and quality state, the error where the
+    /// truth is known.
+    pub per_scan: Vec<ScanRecord>,
 }
 
 /// What `beamfield track` found over its seeds.
@@ -83,6 +88,9 @@ pub struct TrackReport {
     pub output: Option<String>,
     /// Where the odometry came from.
     pub odometry: String,
+    /// Where the errors were measured: `every scan` (the logged poses) or `reference` (the
+    /// reference scans of `--reference` only).
+    pub scored: String,
     /// Which odometry, in one word: `synthetic` (the filter's own noise model), `recorded` (a
     /// file or a bag), `wheels-mild`, `wheels-strong`, `wheels-typical` (the wheel model).
     pub odometry_model: String,
@@ -165,8 +173,32 @@ impl fmt::Display for TrackReport {
                 writeln!(f, "bag: skipped {n}: {why}")?;
             }
         }
+        if let Some(r) = self.runs.first() {
+            writeln!(
+                f,
+                "scored at {} scans ({}), from scan {}",
+                r.metrics.scored_scans,
+                self.scored,
+                r.per_scan.first().map_or(0, |s| s.scan)
+            )?;
+        }
         for r in &self.runs {
             let m = &r.metrics;
+            let q = &m.quality;
+            writeln!(
+                f,
+                "seed {}: quality at the scored scans (within / beyond {} m): tracking {} / {}, \
+                 uncertain {} / {}, lost {} / {}; {} resets",
+                r.seed,
+                crate::track::LOST_M,
+                q.tracking_within,
+                q.tracking_off,
+                q.uncertain_within,
+                q.uncertain_off,
+                q.lost_within,
+                q.lost_off,
+                r.resets,
+            )?;
             writeln!(
                 f,
                 "seed {}: trans RMSE {:.2} cm, heading RMSE {:.2}°, max {:.3} m, within 10 cm/2° \

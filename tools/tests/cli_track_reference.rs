@@ -1,0 +1,169 @@
+//! `beamfield track` on a log whose poses are the robot's odometry
+//! (`data/laser_intel_lab_raw_odometry/`: the Intel lab's raw wheel odometry) with reference
+//! poses at some scans (`anchors.tsv`): the run starts at the first anchor, is scored at the
+//! anchors only, and reports every update in `--json`.
+
+mod common;
+
+use common::{bin, run_json};
+use std::path::{Path, PathBuf};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn data() -> PathBuf {
+    repo().join("data/laser_intel_lab_raw_odometry")
+}
+
+fn field() -> PathBuf {
+    repo().join("firmware/assets/intel.bin")
+}
+
+/// The anchors as the file has them, read here independently: (scan, x, y, θ).
+fn anchors() -> Vec<(usize, f64, f64, f64)> {
+    let text = std::fs::read_to_string(data().join("anchors.tsv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split('\t').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (i, x, y, t) = (col("index"), col("ref_x"), col("ref_y"), col("ref_theta"));
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            (
+                f[i].parse().unwrap(),
+                f[x].parse().unwrap(),
+                f[y].parse().unwrap(),
+                f[t].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+fn args(scans: &str) -> Vec<String> {
+    [
+        "--json",
+        "track",
+        "--field",
+        field().to_str().unwrap(),
+        "--log",
+        data().join("intel-real-odom.clf").to_str().unwrap(),
+        "--log-poses",
+        "odometry",
+        "--reference",
+        data().join("anchors.tsv").to_str().unwrap(),
+        "--scans",
+        scans,
+        "--seeds",
+        "2",
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+#[test]
+fn real_odometry_is_scored_at_the_anchors_only() {
+    const SCANS: usize = 160;
+    let v = run_json(bin().args(args(&SCANS.to_string())));
+    let want: Vec<_> = anchors().into_iter().filter(|a| a.0 < SCANS).collect();
+    assert!(want.len() >= 5, "{} anchors in the slice", want.len());
+    assert_eq!(v["scored"], "reference");
+    assert_eq!(v["odometry_model"], "recorded");
+    for run in v["runs"].as_array().unwrap() {
+        assert_eq!(run["metrics"]["scored_scans"], want.len());
+        let per = run["per_scan"].as_array().unwrap();
+        // From the first anchor to the last scan asked for, one record per update.
+        assert_eq!(per.len(), SCANS - want[0].0);
+        assert_eq!(per[0]["scan"], want[0].0);
+        let mut next = want.iter().peekable();
+        let mut sq = 0.0;
+        for rec in per {
+            let k = rec["scan"].as_u64().unwrap() as usize;
+            assert!(["tracking", "uncertain", "lost"].contains(&rec["quality"].as_str().unwrap()));
+            match next.peek() {
+                Some(&&(a, x, y, t)) if a == k => {
+                    next.next();
+                    // The error is against the anchor's pose, not the log's (odometry) pose.
+                    let p = rec["pose"].as_array().unwrap();
+                    let (px, py, pt) = (
+                        p[0].as_f64().unwrap(),
+                        p[1].as_f64().unwrap(),
+                        p[2].as_f64().unwrap(),
+                    );
+                    let e = (px - x).hypot(py - y);
+                    let got = rec["error_m"].as_f64().unwrap();
+                    assert!((got - e).abs() < 1e-4, "scan {k}: {got} vs {e}");
+                    let dh = (pt - t + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                        - std::f64::consts::PI;
+                    let head = rec["heading_error_deg"].as_f64().unwrap();
+                    assert!((head - dh.abs().to_degrees()).abs() < 1e-2, "scan {k}");
+                    sq += e * e;
+                }
+                _ => {
+                    assert!(rec["error_m"].is_null(), "scan {k} has no anchor");
+                    assert!(rec["heading_error_deg"].is_null());
+                }
+            }
+        }
+        assert!(next.next().is_none(), "every anchor scored");
+        let rmse = (sq / want.len() as f64).sqrt();
+        let reported = run["metrics"]["trans_rmse_m"].as_f64().unwrap();
+        assert!((rmse - reported).abs() < 1e-6, "{rmse} vs {reported}");
+        // The quality table covers the scored scans.
+        let q = &run["metrics"]["quality"];
+        let total: u64 = [
+            "tracking_within",
+            "tracking_off",
+            "uncertain_within",
+            "uncertain_off",
+            "lost_within",
+            "lost_off",
+        ]
+        .iter()
+        .map(|k| q[k].as_u64().unwrap())
+        .sum();
+        assert_eq!(total as usize, want.len());
+        // Real odometry drifts by about 12 % of the distance; the filter keeps the robot.
+        assert!(reported < 0.3, "RMSE {reported} m at the anchors");
+    }
+}
+
+#[test]
+fn odometry_poses_need_a_reference_and_no_other_odometry() {
+    // Without --reference (the flag and its value dropped).
+    let mut a = args("100");
+    a.drain(8..10);
+    let out = bin().args(&a).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("give --reference"), "{err}");
+    let mut a = args("100");
+    a.extend(["--wheel-odometry".into(), "mild".into()]);
+    let out = bin().args(&a).output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("need a log of true poses"), "{err}");
+}
+
+#[test]
+fn reference_file_errors_name_the_line() {
+    let dir = std::env::temp_dir().join(format!("bf-reference-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("ref.tsv");
+    let run = |text: &str| {
+        std::fs::write(&bad, text).unwrap();
+        let mut a = args("100");
+        a[9] = bad.display().to_string();
+        let out = bin().args(&a).output().unwrap();
+        assert!(!out.status.success(), "{text:?} accepted");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    assert!(run("40 1 2 3\n40 1 2 3\n").contains("line 2: scan 40 has a pose already"));
+    assert!(run("index a b c\n").contains("line 1: a header needs the columns"));
+    assert!(run("# nothing\n").contains("no reference pose in it"));
+    assert!(run("99999 1 2 3\n").contains("line 1: scan 99999 is past the log's 2726 scans"));
+    assert!(run("40 1 inf 3\n").contains("line 1: x, y and θ must be finite"));
+    // Only anchors past the scans run: nothing to start from.
+    assert!(run("500 1 2 3\n").contains("no reference pose within the 100 scans run"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
