@@ -10,10 +10,10 @@
 //! 1. **Link** (odometry and commands, the protocol of [`crate::link`]): frames are decoded as
 //!    long as the odometry window ([`window::WINDOW`] samples) and the command queue
 //!    ([`COMMANDS`]) have room — a sender that runs ahead of the LiDAR is held back. While the
-//!    LiDAR is silent (the last poll found no LiDAR byte waiting) the link is read all the same,
-//!    so that it never backs up: the oldest odometry is dropped to make room (counted in
-//!    [`RobotCounters::odometry_dropped`] and the heartbeats' drops) and a command that finds
-//!    the queue full is refused.
+//!    caller says the LiDAR is silent ([`Robot::set_lidar_silent`], from the device's timer)
+//!    the link is read all the same, so that it never backs up: the
+//!    oldest odometry is dropped to make room (counted in [`RobotCounters::odometry_dropped`]
+//!    and the heartbeats' drops) and a command that finds the queue full is refused.
 //!    Odometry ([`link::WheelOdometry`], or [`link::WheelTicks`] through the crate's
 //!    [`DiffDrive`] model) must come with strictly increasing timestamps, at most
 //!    [`RobotConfig::max_odometry_lead_us`] ahead of the device clock, and steps a robot can
@@ -44,7 +44,7 @@
 //!
 //! Nothing depends on how the bytes are split between calls, as long as the odometry that
 //! reaches a revolution's time arrives before the next revolution is complete, is stamped
-//! (not 0, "on arrival") and the LiDAR is not silent while the window is full: the device's
+//! (not 0, "on arrival") and the LiDAR is not declared silent: the device's
 //! output is then a function of the two byte streams alone, which is what lets the host
 //! recompute it.
 
@@ -350,8 +350,9 @@ pub struct Robot<'a, const N: usize, const S: usize> {
     force_update: bool,
     processed_us: u64,
     counters: RobotCounters,
-    /// The last poll found no LiDAR byte waiting: the link is read whatever the window holds.
-    lidar_starved: bool,
+    /// The caller says the LiDAR is silent ([`Robot::set_lidar_silent`]): the link is read
+    /// whatever the window holds.
+    lidar_silent: bool,
     /// The LD06 stamp of the last point decoded, and whether the clock took it.
     last_stamp_ms: Option<u16>,
     stamp_taken: bool,
@@ -429,7 +430,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             force_update: false,
             processed_us: 0,
             counters: RobotCounters::default(),
-            lidar_starved: false,
+            lidar_silent: false,
             last_stamp_ms: None,
             stamp_taken: true,
             deskewer,
@@ -467,8 +468,8 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         // While the LiDAR is silent, no revolution takes odometry out of the window or commands
         // out of the queue: the link is read all the same (the oldest odometry dropped, further
         // commands refused), so that it never backs up into the receive ring.
-        let starved = self.lidar_starved;
-        while starved || (self.window.has_room() && !self.commands.is_full()) {
+        let silent = self.lidar_silent;
+        while silent || (self.window.has_room() && !self.commands.is_full()) {
             let Some(b) = link.next_byte() else { break };
             if progress.link_bytes == 0 {
                 probe.enter(Stage::Link);
@@ -481,7 +482,6 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         if progress.link_bytes > 0 {
             probe.leave(Stage::Link);
         }
-        self.lidar_starved = false;
         while self.next.is_none() {
             if self
                 .pending
@@ -490,10 +490,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             {
                 break;
             }
-            let Some(b) = lidar.next_byte() else {
-                self.lidar_starved = true;
-                break;
-            };
+            let Some(b) = lidar.next_byte() else { break };
             if progress.lidar_bytes == 0 {
                 probe.enter(Stage::Lidar);
             }
@@ -546,6 +543,16 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             link_errors: l.errors().wrapping_add(self.counters.refused),
         };
         self.send(&Message::Heartbeat(heartbeat), sink);
+    }
+
+    /// Tells the application whether the LiDAR is silent: no revolution for longer than the
+    /// odometry window lasts (the device knows from its timer; the application keeps no time of
+    /// its own). While it is, [`Robot::poll`] reads the link whatever the odometry window and
+    /// the command queue hold, dropping the oldest odometry (counted in
+    /// [`RobotCounters::odometry_dropped`]) and refusing commands beyond the queue, so that the
+    /// link never backs up into the receive ring. Off at the start.
+    pub fn set_lidar_silent(&mut self, silent: bool) {
+        self.lidar_silent = silent;
     }
 
     /// Counts `n` bytes or messages lost before they reached the application (a receive ring

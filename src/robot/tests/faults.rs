@@ -322,7 +322,7 @@ fn an_initial_pose_with_a_covariance_the_filter_cannot_use_is_refused() {
 #[test]
 fn the_link_is_read_while_the_lidar_is_silent() {
     let room = room();
-    // 4 s of odometry and three commands, the LiDAR silent.
+    // An initial pose and 4 s of odometry, the LiDAR silent.
     let mut e = Encoder::new();
     let mut link = Vec::new();
     let mut t = 0;
@@ -330,23 +330,16 @@ fn the_link_is_read_while_the_lidar_is_silent() {
     while t <= 4_000_000 {
         link.extend(frame(&mut e, odo(t, truth(t))));
         samples += 1;
-        if t == 3_000_000 {
+        if t == 0 {
             link.extend(frame(&mut e, initial(truth(t), COV)));
         }
         t += 20_000;
     }
-    let (out, counters) = run(&room, &[], &link, 0, 0, None);
-    assert_eq!(counters.odometry, samples, "{counters:?}");
-    assert_eq!(
-        counters.odometry_dropped,
-        samples - window::WINDOW as u32,
-        "{counters:?}"
-    );
-    assert_eq!(errors(&out), []);
     let mut store = Particles::<CAP>::new();
     let view = FieldView::parse(&room.blob).unwrap();
     let mut robot =
         Robot::<CAP, BEAMS>::new(&mut store, view, None, layout(), config(), None).unwrap();
+    robot.set_lidar_silent(true);
     let mut sink = Collect::default();
     let mut ks = SliceSource::new(&link);
     for _ in 0..1_000 {
@@ -358,10 +351,29 @@ fn the_link_is_read_while_the_lidar_is_silent() {
         }
     }
     assert!(ks.is_empty(), "{} of {} bytes read", ks.taken(), link.len());
+    let counters = robot.counters();
+    assert_eq!(counters.odometry, samples, "{counters:?}");
+    let dropped = samples - window::WINDOW as u32;
+    assert_eq!(counters.odometry_dropped, dropped, "{counters:?}");
+    assert_eq!(errors(&sink), []);
     // The dropped samples are in the heartbeat's drops.
     robot.send_heartbeat(&mut sink);
     let Some((Message::Heartbeat(h), _)) = sink.frames.last() else {
         panic!("no heartbeat");
     };
-    assert_eq!(h.drops, samples - window::WINDOW as u32);
+    assert_eq!(h.drops, dropped);
+    // The LiDAR comes back: the initial pose sent during the silence is carried out.
+    robot.set_lidar_silent(false);
+    let (lidar, _) = lidar_stream_of(8, |_| truth(4_000_000));
+    let mut ls = SliceSource::new(&lidar);
+    for _ in 0..1_000 {
+        if robot
+            .poll(&mut ls, &mut SliceSource::new(&[]), &mut sink)
+            .is_idle()
+        {
+            break;
+        }
+    }
+    assert!(!estimates(&sink).is_empty());
+    assert!(robot.is_initialized());
 }
