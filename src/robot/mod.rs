@@ -363,8 +363,9 @@ pub struct Robot<'a, const N: usize, const S: usize> {
 impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     /// Sets up the application over the distance field `view` (and its free space, needed for
     /// global localization), the sensor's `layout` and `config`. With a `seed` (the estimate
-    /// saved at the last run, [`Sink::save`]) the filter starts around it; without, it waits for
-    /// a `SetInitialPose` or `StartGlobalLocalization`.
+    /// saved at the last run, [`Sink::save`]) the filter starts around it; without (or with a
+    /// seed whose position lies beyond [`link::MAX_POSITION_M`] or whose covariance an initial
+    /// pose could not carry), it waits for a `SetInitialPose` or `StartGlobalLocalization`.
     ///
     /// # Errors
     /// The first parameter refused: [`Error::Likelihood`], [`Error::Temper`], [`Error::Mcl`]
@@ -437,7 +438,14 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             deskewed: Scan::default(),
         };
         if let Some(s) = seed {
-            if s.pose.is_finite() && robot.check_covariance(&s.covariance).is_ok() {
+            // A seed the link could carry (a corrupted store holds anything): a position within
+            // link::MAX_POSITION_M, a covariance the filter can use.
+            let on_map = |v: f32| v.abs() <= link::MAX_POSITION_M;
+            if s.pose.is_finite()
+                && on_map(s.pose.x_m)
+                && on_map(s.pose.y_m)
+                && robot.check_covariance(&s.covariance).is_ok()
+            {
                 robot.init_around(&s.pose, &s.covariance);
             }
         }

@@ -377,3 +377,21 @@ fn the_link_is_read_while_the_lidar_is_silent() {
     assert!(!estimates(&sink).is_empty());
     assert!(robot.is_initialized());
 }
+
+#[test]
+fn a_seed_beyond_the_link_s_range_is_not_used() {
+    // Found by the robot_poll fuzz target: a seed at −2.5·10³³ m gave an infinite covariance.
+    let room = room();
+    let (lidar, _) = lidar_stream(4);
+    let link = paced_link(500_000, |t| t.max(1));
+    let link: Vec<u8> = link.into_iter().skip(2).flat_map(|(_, b)| b).collect();
+    for x in [-2.5e33f32, 1.0e6] {
+        let seed = Seed {
+            pose: Pose::new(x, x, 0.0),
+            covariance: COV,
+        };
+        let (out, counters) = run(&room, &lidar, &link, 0, 0, Some(seed));
+        assert!(estimates(&out).is_empty(), "{x}");
+        assert_eq!(counters.updates, 0);
+    }
+}
