@@ -9,17 +9,31 @@
 //!
 //! 1. **Link** (odometry and commands, the protocol of [`crate::link`]): frames are decoded as
 //!    long as the odometry window ([`window::WINDOW`] samples) and the command queue
-//!    ([`COMMANDS`]) have room — a sender that runs ahead is held back, nothing is dropped.
+//!    ([`COMMANDS`]) have room — a sender that runs ahead of the LiDAR is held back. While the
+//!    caller says the LiDAR is silent ([`Robot::set_lidar_silent`], from the device's timer)
+//!    the link is read all the same, so that it never backs up: the
+//!    oldest odometry is dropped to make room (counted in [`RobotCounters::odometry_dropped`]
+//!    and the heartbeats' drops) and a command that finds the queue full is refused.
 //!    Odometry ([`link::WheelOdometry`], or [`link::WheelTicks`] through the crate's
-//!    [`DiffDrive`] model) must come with strictly increasing timestamps and steps a robot can
+//!    [`DiffDrive`] model) must come with strictly increasing timestamps, at most
+//!    [`RobotConfig::max_odometry_lead_us`] ahead of the device clock, and steps a robot can
 //!    make ([`RobotConfig::max_speed_m_per_s`], [`RobotConfig::max_turn_rad_per_s`]); anything
-//!    else is refused with an [`link::ErrorReport`] and leaves the state unchanged. Commands are
-//!    checked when they arrive (and refused then) and carried out at their place in the stream:
-//!    before the first revolution that ends after the last odometry sample received before them.
+//!    else is refused with an [`link::ErrorReport`] and leaves the state unchanged — except a
+//!    step no robot makes after a silence of [`RobotConfig::odometry_restart_gap_us`], which is
+//!    a restart of the odometry: a new odometry frame, no motion applied across it, the
+//!    estimates across it flagged [`EstimateFlags::ODOMETRY_STALE`]. A timestamp of 0 means
+//!    "on arrival": the device clock when the frame is decoded. Commands are
+//!    checked when they arrive (and refused then: a `SetInitialPose` whose covariance spreads
+//!    wider than [`RobotConfig::max_init_sigma_xy_m`] too) and carried out at their place in the
+//!    stream: before the first revolution that ends after the last odometry sample received
+//!    before them.
 //! 2. **LiDAR** (LD06 frames): decoded and assembled into revolutions on the layout. The
 //!    revolution's time is the middle of its first and last frames' timestamps, on the sensor's
-//!    clock unwrapped into µs ([`ScanClock`]). **The sensor's clock is the device's clock**:
-//!    odometry timestamps must be on it (a sender learns it from the heartbeats' timestamps).
+//!    clock unwrapped into µs ([`ScanClock`], advanced at every frame; a frame whose stamp
+//!    jumps further than [`clock::MAX_STEP_MS`] is held until the next frame confirms the jump,
+//!    and its points are dropped — a single wrong stamp never moves the clock). **The sensor's
+//!    clock is the device's clock**: odometry timestamps must be on it (a sender learns it from
+//!    the heartbeats' timestamps).
 //! 3. **Update**: a revolution is processed once the odometry reaches its time (the pose is
 //!    interpolated there, [`OdometryWindow::at`]) — or, when the next revolution is complete
 //!    first, with the odometry it has, flagged [`EstimateFlags::ODOMETRY_STALE`] and counted as
@@ -29,11 +43,12 @@
 //!    A heartbeat follows every [`RobotConfig::heartbeat_every`] revolutions.
 //!
 //! Nothing depends on how the bytes are split between calls, as long as the odometry that
-//! reaches a revolution's time arrives before the next revolution is complete: the device's
+//! reaches a revolution's time arrives before the next revolution is complete, is stamped
+//! (not 0, "on arrival") and the LiDAR is not declared silent: the device's
 //! output is then a function of the two byte streams alone, which is what lets the host
 //! recompute it.
 
-mod clock;
+pub mod clock;
 mod io;
 #[cfg(test)]
 mod tests;
@@ -62,6 +77,11 @@ use heapless::Deque;
 /// Commands queued until their place in the stream is reached.
 pub const COMMANDS: usize = 8;
 
+/// The largest standard deviation of heading a cloud is drawn with, rad (a wider one is clamped
+/// to it: at 2π the heading is as good as uniform, and a wider one would be drawn at angles too
+/// large to wrap exactly in `f32`).
+pub const MAX_INIT_SIGMA_THETA_RAD: f32 = core::f32::consts::TAU;
+
 /// What the application is set up with. Units: metres, radians, seconds, microseconds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -87,6 +107,11 @@ pub struct RobotConfig {
     pub min_init_sigma_xy_m: f32,
     /// See [`RobotConfig::min_init_sigma_xy_m`], rad.
     pub min_init_sigma_theta_rad: f32,
+    /// The largest standard deviation in position an initial pose (or a seed) may carry, m: a
+    /// `SetInitialPose` whose covariance gives a wider one (`√((c_xx + c_yy) / 2)`, not finite
+    /// included) is refused with an [`link::ErrorReport`] of [`ErrorCode::Refused`] and changes
+    /// nothing. The heading's standard deviation is clamped to [`MAX_INIT_SIGMA_THETA_RAD`].
+    pub max_init_sigma_xy_m: f32,
     /// Wheel geometry for [`link::WheelTicks`]; without it tick messages are refused.
     pub wheels: Option<DiffDriveGeometry>,
     /// Odometry faster than this between two samples is refused, m/s.
@@ -96,6 +121,16 @@ pub struct RobotConfig {
     /// Interpolating across a longer gap between two odometry samples flags the estimate
     /// [`EstimateFlags::ODOMETRY_STALE`], µs.
     pub max_odometry_gap_us: u64,
+    /// An odometry sample stamped further than this ahead of the device clock (before the clock
+    /// has started: of the newest sample) is refused ([`ErrorCode::ValueOutOfRange`] at the
+    /// timestamp's offset), µs.
+    pub max_odometry_lead_us: u64,
+    /// After a silence of the odometry at least this long, a sample that no robot could have
+    /// reached within the speed limits is taken as a restart of the odometry (a new odometry
+    /// frame, counted in [`RobotCounters::odometry_restarts`]): no motion is applied across it
+    /// and the next estimate is flagged [`EstimateFlags::ODOMETRY_STALE`]. Within shorter
+    /// gaps such a sample is refused, µs.
+    pub odometry_restart_gap_us: u64,
     /// Skip the update until the odometry has moved this far since the last one (AMCL's
     /// `update_min_d`), m; 0 updates at every revolution.
     pub update_min_d_m: f32,
@@ -116,8 +151,10 @@ pub struct RobotConfig {
 impl RobotConfig {
     /// The defaults of a small indoor robot with an LD06: 500 particles, the likelihood field of
     /// the Intel lab demo (z_hit 0.95, z_rand 0.05, σ_hit 5 cm, κ 8.25), odometry noise α 0.005,
-    /// resampling below half the particles, at most 2 m/s and 4 rad/s, 100 ms gaps, an update at
-    /// every revolution and a heartbeat every 10.
+    /// resampling below half the particles, at most 2 m/s and 4 rad/s, 100 ms gaps, initial
+    /// poses up to σ 100 m, odometry up to 10 s ahead of the device clock, a restart of the
+    /// odometry recognised after 1 s of silence, an update at every revolution and a heartbeat
+    /// every 10.
     ///
     /// # Errors
     /// [`Error::Motion`] if `max_range_m` is not finite (it checks nothing else: the checks are
@@ -134,10 +171,13 @@ impl RobotConfig {
             resample_ess_fraction: 0.5,
             min_init_sigma_xy_m: 0.01,
             min_init_sigma_theta_rad: 0.005,
+            max_init_sigma_xy_m: 100.0,
             wheels: None,
             max_speed_m_per_s: 2.0,
             max_turn_rad_per_s: 4.0,
             max_odometry_gap_us: 100_000,
+            max_odometry_lead_us: 10_000_000,
+            odometry_restart_gap_us: 1_000_000,
             update_min_d_m: 0.0,
             update_min_a_rad: 0.0,
             heartbeat_every: 10,
@@ -180,6 +220,14 @@ pub struct RobotCounters {
     /// Revolutions updated without de-skew although it is on: no timestamps, no odometry at
     /// the revolution's start or end (or only a stale one), or a pose that is not finite.
     pub deskew_skipped: u32,
+    /// Odometry samples dropped, oldest first, to keep reading the link while the LiDAR is
+    /// silent (the window full, no revolution to use them), or dropped because they lay
+    /// further ahead of the device clock than [`RobotConfig::max_odometry_lead_us`].
+    pub odometry_dropped: u32,
+    /// Odometry restarts: a sample after a silence of at least
+    /// [`RobotConfig::odometry_restart_gap_us`] that no robot could have reached from the last
+    /// one, taken as the start of a new odometry frame rather than as motion.
+    pub odometry_restarts: u32,
 }
 
 /// The stages of [`Robot::poll_probed`], for a caller that measures them (instruction counts
@@ -294,12 +342,20 @@ pub struct Robot<'a, const N: usize, const S: usize> {
     commands: Deque<Queued, COMMANDS>,
     pending: Option<Revolution<S>>,
     next: Option<Revolution<S>>,
-    last_odom: Option<Pose>,
+    /// The odometry pose of the last update (or initialization), and its frame
+    /// ([`window::Interpolated::frame`]).
+    last_odom: Option<(Pose, u32)>,
     initialized: bool,
     global: bool,
     force_update: bool,
     processed_us: u64,
     counters: RobotCounters,
+    /// The caller says the LiDAR is silent ([`Robot::set_lidar_silent`]): the link is read
+    /// whatever the window holds.
+    lidar_silent: bool,
+    /// The LD06 stamp of the last point decoded, and whether the clock took it.
+    last_stamp_ms: Option<u16>,
+    stamp_taken: bool,
     deskewer: Option<Deskewer>,
     deskewed: Scan<S>,
 }
@@ -307,8 +363,9 @@ pub struct Robot<'a, const N: usize, const S: usize> {
 impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     /// Sets up the application over the distance field `view` (and its free space, needed for
     /// global localization), the sensor's `layout` and `config`. With a `seed` (the estimate
-    /// saved at the last run, [`Sink::save`]) the filter starts around it; without, it waits for
-    /// a `SetInitialPose` or `StartGlobalLocalization`.
+    /// saved at the last run, [`Sink::save`]) the filter starts around it; without (or with a
+    /// seed whose position lies beyond [`link::MAX_POSITION_M`] or whose covariance an initial
+    /// pose could not carry), it waits for a `SetInitialPose` or `StartGlobalLocalization`.
     ///
     /// # Errors
     /// The first parameter refused: [`Error::Likelihood`], [`Error::Temper`], [`Error::Mcl`]
@@ -374,11 +431,21 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             force_update: false,
             processed_us: 0,
             counters: RobotCounters::default(),
+            lidar_silent: false,
+            last_stamp_ms: None,
+            stamp_taken: true,
             deskewer,
             deskewed: Scan::default(),
         };
         if let Some(s) = seed {
-            if s.pose.is_finite() {
+            // A seed the link could carry (a corrupted store holds anything): a position within
+            // link::MAX_POSITION_M, a covariance the filter can use.
+            let on_map = |v: f32| v.abs() <= link::MAX_POSITION_M;
+            if s.pose.is_finite()
+                && on_map(s.pose.x_m)
+                && on_map(s.pose.y_m)
+                && robot.check_covariance(&s.covariance).is_ok()
+            {
                 robot.init_around(&s.pose, &s.covariance);
             }
         }
@@ -406,7 +473,11 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         probe: &mut impl Probe,
     ) -> Progress {
         let mut progress = Progress::default();
-        while self.window.has_room() && !self.commands.is_full() {
+        // While the LiDAR is silent, no revolution takes odometry out of the window or commands
+        // out of the queue: the link is read all the same (the oldest odometry dropped, further
+        // commands refused), so that it never backs up into the receive ring.
+        let silent = self.lidar_silent;
+        while silent || (self.window.has_room() && !self.commands.is_full()) {
             let Some(b) = link.next_byte() else { break };
             if progress.link_bytes == 0 {
                 probe.enter(Stage::Link);
@@ -475,10 +546,21 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
                 .counters
                 .drops
                 .wrapping_add(self.counters.late_odometry)
+                .wrapping_add(self.counters.odometry_dropped)
                 .wrapping_add(d.bad_checksum),
             link_errors: l.errors().wrapping_add(self.counters.refused),
         };
         self.send(&Message::Heartbeat(heartbeat), sink);
+    }
+
+    /// Tells the application whether the LiDAR is silent: no revolution for longer than the
+    /// odometry window lasts (the device knows from its timer; the application keeps no time of
+    /// its own). While it is, [`Robot::poll`] reads the link whatever the odometry window and
+    /// the command queue hold, dropping the oldest odometry (counted in
+    /// [`RobotCounters::odometry_dropped`]) and refusing commands beyond the queue, so that the
+    /// link never backs up into the receive ring. Off at the start.
+    pub fn set_lidar_silent(&mut self, silent: bool) {
+        self.lidar_silent = silent;
     }
 
     /// Counts `n` bytes or messages lost before they reached the application (a receive ring
@@ -527,6 +609,11 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         self.clock.now_us()
     }
 
+    /// LiDAR timestamps the device clock dropped as wrong ([`ScanClock::outliers`]).
+    pub fn clock_outliers(&self) -> u32 {
+        self.clock.outliers()
+    }
+
     /// The odometry time a revolution waits for: its time, or with de-skew on its last stamp.
     fn ready_us(&self, rev: &Revolution<S>) -> u64 {
         match (&self.deskewer, rev.sweep) {
@@ -536,17 +623,35 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     }
 
     fn push_lidar_byte(&mut self, byte: u8) {
-        let (assembler, clock) = (&mut self.assembler, &mut self.clock);
+        let (assembler, clock, last_stamp, stamp_taken) = (
+            &mut self.assembler,
+            &mut self.clock,
+            &mut self.last_stamp_ms,
+            &mut self.stamp_taken,
+        );
         let mut done: Option<Revolution<S>> = None;
         self.lidar.push_byte(byte, &mut |point| {
+            // The clock moves once per frame (its points share the stamp). The points of a frame
+            // whose stamp it did not take (a wrong stamp, or the first frame after a silence)
+            // are dropped: the assembler would read the stamp as turns gone by.
+            if let Some(ts) = point.timestamp_ms {
+                if *last_stamp != Some(ts) {
+                    *last_stamp = Some(ts);
+                    clock.advance(ts);
+                    *stamp_taken = clock.time_of(ts).is_some();
+                }
+                if !*stamp_taken {
+                    return;
+                }
+            }
             if assembler.push(point).is_some() {
                 let r = assembler.revolution();
-                let (t_us, stamps) = match (r.start_timestamp_ms, r.end_timestamp_ms) {
-                    (Some(a), Some(b)) => {
-                        let t0 = clock.advance(a);
-                        let t1 = clock.advance(b);
-                        (t0 + (t1 - t0) / 2, Some((t0, t1)))
-                    }
+                // A stamp the clock did not take (a wrong one) gives no time: the revolution
+                // is timed by its other stamp, or by the clock.
+                let at = |ts: Option<u16>| ts.and_then(|ts| clock.time_of(ts));
+                let (t_us, stamps) = match (at(r.start_timestamp_ms), at(r.end_timestamp_ms)) {
+                    (Some(t0), Some(t1)) if t1 >= t0 => (t0 + (t1 - t0) / 2, Some((t0, t1))),
+                    (Some(t), None) | (None, Some(t)) => (t, None),
                     _ => (clock.now_us(), None),
                 };
                 // The assembler's anchors are the same first and last stamps.
@@ -588,9 +693,14 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         };
         let t = frame.message.message_type();
         let refusal = match frame.message {
-            Message::WheelOdometry(o) => self.on_odometry_pose(o.timestamp_us, o.pose),
+            Message::WheelOdometry(o) => {
+                let t_us = self.arrival(o.timestamp_us);
+                self.on_odometry_pose(t_us, o.pose)
+            }
             Message::WheelTicks(k) => self.on_ticks(&k),
-            Message::SetInitialPose(p) => self.queue(Command::Initial(p)),
+            Message::SetInitialPose(p) => self
+                .check_covariance(&p.covariance)
+                .and_then(|()| self.queue(Command::Initial(p))),
             Message::StartGlobalLocalization => {
                 if self.free.is_none() {
                     Err((ErrorCode::Refused, 0))
@@ -661,7 +771,72 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         alphas
     }
 
+    /// The standard deviations a cloud is drawn with around a pose of `covariance`, m and rad:
+    /// widened to the configured floors, the heading's clamped to [`MAX_INIT_SIGMA_THETA_RAD`].
+    fn init_sigmas(&self, covariance: &[[f32; 3]; 3]) -> (f32, f32) {
+        let [vx, vy, vt] = crate::mcl::diagonal_variances(covariance);
+        // Halved before the sum: two variances near f32::MAX do not overflow.
+        let sigma_xy = math::sqrt(0.5 * vx + 0.5 * vy).max(self.config.min_init_sigma_xy_m);
+        let sigma_theta = math::sqrt(vt)
+            .max(self.config.min_init_sigma_theta_rad)
+            .min(MAX_INIT_SIGMA_THETA_RAD);
+        (sigma_xy, sigma_theta)
+    }
+
+    /// Refuses a covariance whose position spread the filter cannot use
+    /// ([`RobotConfig::max_init_sigma_xy_m`]).
+    fn check_covariance(&self, covariance: &[[f32; 3]; 3]) -> Result<(), (ErrorCode, u8)> {
+        let (sigma_xy, sigma_theta) = self.init_sigmas(covariance);
+        if sigma_xy.is_finite()
+            && sigma_xy <= self.config.max_init_sigma_xy_m
+            && sigma_theta.is_finite()
+        {
+            Ok(())
+        } else {
+            Err((ErrorCode::Refused, 0))
+        }
+    }
+
+    /// A message's timestamp on the device clock: 0 means "when the frame arrives", the time of
+    /// the last LiDAR frame decoded (0 before the first).
+    fn arrival(&self, timestamp_us: u64) -> u64 {
+        if timestamp_us == 0 {
+            self.clock.now_us()
+        } else {
+            timestamp_us
+        }
+    }
+
+    /// Refuses an odometry time that is not after the newest sample's, or lies further ahead
+    /// than [`RobotConfig::max_odometry_lead_us`]. Samples taken before the device clock started
+    /// that lie that far ahead of it once it has are dropped first (counted).
+    fn check_time(&mut self, t_us: u64) -> Result<(), (ErrorCode, u8)> {
+        let lead = self.config.max_odometry_lead_us;
+        let far = (ErrorCode::ValueOutOfRange, 0);
+        if self.clock.started() {
+            let limit = self.clock.now_us().saturating_add(lead);
+            if self.window.newest().is_some_and(|n| n.t_us > limit) {
+                let n = self.window.len() as u32;
+                self.window.clear();
+                self.counters.odometry_dropped = self.counters.odometry_dropped.wrapping_add(n);
+            }
+            if t_us > limit {
+                return Err(far);
+            }
+        }
+        if let Some(n) = self.window.newest() {
+            if t_us <= n.t_us {
+                return Err((ErrorCode::OutOfOrder, 0));
+            }
+            if t_us - n.t_us > lead {
+                return Err(far);
+            }
+        }
+        Ok(())
+    }
+
     fn on_odometry_pose(&mut self, t_us: u64, pose: Pose) -> Result<(), (ErrorCode, u8)> {
+        self.check_time(t_us)?;
         self.switch_source(OdometrySource::Poses);
         self.accept_sample(t_us, pose)
     }
@@ -670,13 +845,8 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         if self.wheels.is_none() {
             return Err((ErrorCode::Refused, 0));
         }
-        if self
-            .window
-            .newest()
-            .is_some_and(|n| k.timestamp_us <= n.t_us)
-        {
-            return Err((ErrorCode::OutOfOrder, 0));
-        }
+        let t_us = self.arrival(k.timestamp_us);
+        self.check_time(t_us)?;
         self.switch_source(OdometrySource::Ticks);
         let Some(wheels) = self.wheels.as_mut() else {
             return Err((ErrorCode::Refused, 0));
@@ -693,7 +863,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             ));
         }
         let pose = wheels.pose();
-        self.accept_sample(k.timestamp_us, pose)
+        self.accept_sample(t_us, pose)
     }
 
     fn switch_source(&mut self, to: OdometrySource) {
@@ -713,18 +883,30 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             if t_us <= n.t_us {
                 return Err((ErrorCode::OutOfOrder, 0));
             }
-            let dt_s = (t_us - n.t_us) as f32 * 1e-6;
+            let gap_us = t_us - n.t_us;
+            let dt_s = gap_us as f32 * 1e-6;
             let (dx, dy) = (pose.x_m - n.pose.x_m, pose.y_m - n.pose.y_m);
             let d = math::sqrt(dx * dx + dy * dy);
             let a = wrap_angle(pose.theta_rad - n.pose.theta_rad).abs();
-            // A long silence is not checked against the speed limits (the robot may have been
-            // carried), but it still needs finite numbers.
-            let too_fast = dt_s < 1.0
-                && (d > self.config.max_speed_m_per_s * dt_s
-                    || a > self.config.max_turn_rad_per_s * dt_s);
-            if !(d.is_finite()) || too_fast {
+            if !(d.is_finite()) {
                 return Err((ErrorCode::ValueOutOfRange, x_offset));
             }
+            let too_fast = d > self.config.max_speed_m_per_s * dt_s
+                || a > self.config.max_turn_rad_per_s * dt_s;
+            if too_fast {
+                if gap_us < self.config.odometry_restart_gap_us {
+                    return Err((ErrorCode::ValueOutOfRange, x_offset));
+                }
+                // After a long silence, a step no robot makes: the odometry restarted (or the
+                // robot was carried). A new odometry frame, no motion across the gap.
+                self.window.restart();
+                self.counters.odometry_restarts = self.counters.odometry_restarts.wrapping_add(1);
+            }
+        }
+        if !self.window.has_room() {
+            // Only while the LiDAR is silent (the link is read then whatever the window holds).
+            self.window.pop_oldest();
+            self.counters.odometry_dropped = self.counters.odometry_dropped.wrapping_add(1);
         }
         if !self.window.push(Sample { t_us, pose }) {
             return Err((ErrorCode::Refused, 0));
@@ -739,9 +921,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     }
 
     fn init_around(&mut self, pose: &Pose, covariance: &[[f32; 3]; 3]) -> bool {
-        let [vx, vy, vt] = crate::mcl::diagonal_variances(covariance);
-        let sigma_xy = math::sqrt(0.5 * (vx + vy)).max(self.config.min_init_sigma_xy_m);
-        let sigma_theta = math::sqrt(vt).max(self.config.min_init_sigma_theta_rad);
+        let (sigma_xy, sigma_theta) = self.init_sigmas(covariance);
         let ok = self
             .mcl
             .init_gaussian(
@@ -761,7 +941,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
 
     fn apply(&mut self, q: Queued) {
         self.counters.commands = self.counters.commands.wrapping_add(1);
-        let odom_then = self.odom_at(q.at_us).map(|i| i.pose);
+        let odom_then = self.odom_at(q.at_us).map(|i| (i.pose, i.frame));
         match q.command {
             Command::Initial(p) => {
                 if self.init_around(&p.pose, &p.covariance) {
@@ -863,12 +1043,13 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         let odom = self.odom_at(rev.t_us);
         let mut stale = late;
         let step = match (odom, self.last_odom) {
-            (Some(now), Some(before)) => {
+            (Some(now), Some((before, frame))) if frame == now.frame => {
                 stale |= now.stale;
                 OdometryStep::between(&before, &now.pose).ok()
             }
-            (Some(now), None) => {
-                stale |= now.stale;
+            // No odometry before, or before a restart of the odometry: no motion known.
+            (Some(now), last) => {
+                stale |= now.stale || last.is_some();
                 Some(OdometryStep::STILL)
             }
             (None, _) => {
@@ -889,7 +1070,7 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         }
         self.force_update = false;
         if let Some(now) = odom {
-            self.last_odom = Some(now.pose);
+            self.last_odom = Some((now.pose, now.frame));
         }
         probe.enter(Stage::Predict);
         self.mcl.predict(&step, &mut self.rng);
@@ -930,7 +1111,10 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         }
         // The odometry the prediction reached: this revolution's, or the last one used when
         // none reached the device (then the robot is taken to have stood still).
-        let odometry = odom.map(|o| o.pose).or(self.last_odom).unwrap_or_default();
+        let odometry = odom
+            .map(|o| o.pose)
+            .or(self.last_odom.map(|(p, _)| p))
+            .unwrap_or_default();
         Some(link::Estimate::from_mcl(
             &e,
             rev.t_us,

@@ -82,6 +82,11 @@ fn layout() -> BeamLayout<BEAMS> {
 
 /// `revolutions` LD06 revolutions at 10 Hz, each ray-cast from the truth at its middle time.
 fn lidar_stream(revolutions: usize) -> (Vec<u8>, Vec<u64>) {
+    lidar_stream_of(revolutions, truth)
+}
+
+/// [`lidar_stream`] along the path `pose_at`.
+fn lidar_stream_of(revolutions: usize, pose_at: impl Fn(u64) -> Pose) -> (Vec<u8>, Vec<u64>) {
     let layout = layout();
     let mut bytes = Vec::new();
     let mut times = Vec::new();
@@ -92,7 +97,7 @@ fn lidar_stream(revolutions: usize) -> (Vec<u8>, Vec<u64>) {
         // first and last frames' (rounded) stamps.
         let last_ms = start_ms + (34_800 * 10 + 1800) / 3600;
         let mid_us = start_ms * 1000 + (last_ms - start_ms) * 1000 / 2;
-        let pose = truth(mid_us);
+        let pose = pose_at(mid_us);
         let ranges: Vec<f32> = (0..BEAMS)
             .map(|i| range(&pose, layout.beams()[i].bearing_rad))
             .collect();
@@ -598,3 +603,5 @@ fn deskew_of_a_turning_robot_runs_on_every_update_and_tracks() {
         );
     }
 }
+
+mod faults;

@@ -20,15 +20,26 @@ pub struct Sample {
 pub struct Interpolated {
     /// The pose.
     pub pose: Pose,
-    /// `true` when the time lies outside the samples (the nearest one was taken) or between
-    /// two samples further apart than the allowed gap.
+    /// `true` when the time lies outside the samples (the nearest one was taken), between
+    /// two samples further apart than the allowed gap, or across a restart of the odometry.
     pub stale: bool,
+    /// The odometry frame the pose is in: the number of [`OdometryWindow::restart`]s before
+    /// the sample it came from (poses of different frames cannot be compared).
+    pub frame: u32,
 }
 
-/// Odometry samples in time order (strictly increasing timestamps).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Entry {
+    sample: Sample,
+    frame: u32,
+}
+
+/// Odometry samples in time order (strictly increasing timestamps), each in the odometry frame
+/// it was measured in (a new one after every [`OdometryWindow::restart`]).
 #[derive(Clone, Debug, Default)]
 pub struct OdometryWindow {
-    samples: Deque<Sample, WINDOW>,
+    samples: Deque<Entry, WINDOW>,
+    frame: u32,
 }
 
 impl OdometryWindow {
@@ -36,6 +47,7 @@ impl OdometryWindow {
     pub const fn new() -> Self {
         Self {
             samples: Deque::new(),
+            frame: 0,
         }
     }
 
@@ -46,7 +58,13 @@ impl OdometryWindow {
 
     /// The newest sample.
     pub fn newest(&self) -> Option<&Sample> {
-        self.samples.back()
+        self.samples.back().map(|e| &e.sample)
+    }
+
+    /// The odometry restarted: samples pushed from now on are in a new frame, and no pose is
+    /// interpolated across the restart.
+    pub fn restart(&mut self) {
+        self.frame = self.frame.wrapping_add(1);
     }
 
     /// Samples held.
@@ -65,7 +83,12 @@ impl OdometryWindow {
         if self.newest().is_some_and(|n| sample.t_us <= n.t_us) {
             return false;
         }
-        self.samples.push_back(sample).is_ok()
+        self.samples
+            .push_back(Entry {
+                sample,
+                frame: self.frame,
+            })
+            .is_ok()
     }
 
     /// Whether the samples reach time `t_us` (the newest is at or after it).
@@ -74,18 +97,32 @@ impl OdometryWindow {
     }
 
     /// The pose at `t_us`: linear in position, along the shorter arc in heading, between the
-    /// samples on either side. `None` when the window is empty.
+    /// samples on either side (across a restart: the sample before it, stale). `None` when the
+    /// window is empty.
     pub fn at(&self, t_us: u64, max_gap_us: u64) -> Option<Interpolated> {
         let first = *self.samples.front()?;
-        if t_us <= first.t_us {
+        if t_us <= first.sample.t_us {
             return Some(Interpolated {
-                pose: first.pose,
-                stale: t_us < first.t_us,
+                pose: first.sample.pose,
+                stale: t_us < first.sample.t_us,
+                frame: first.frame,
             });
         }
         let mut before = first;
-        for s in self.samples.iter() {
+        for e in self.samples.iter() {
+            let s = &e.sample;
             if s.t_us >= t_us {
+                if e.frame != before.frame {
+                    // Across a restart: the sample on the side of `t_us`'s own frame.
+                    let side = if s.t_us == t_us { *e } else { before };
+                    return Some(Interpolated {
+                        pose: side.sample.pose,
+                        stale: true,
+                        frame: side.frame,
+                    });
+                }
+                let before_frame = before.frame;
+                let before = before.sample;
                 let span = s.t_us - before.t_us;
                 let f = if span == 0 {
                     1.0
@@ -101,23 +138,35 @@ impl OdometryWindow {
                 return Some(Interpolated {
                     pose,
                     stale: span > max_gap_us,
+                    frame: before_frame,
                 });
             }
-            before = *s;
+            before = *e;
         }
         Some(Interpolated {
-            pose: before.pose,
+            pose: before.sample.pose,
             stale: true,
+            frame: before.frame,
         })
     }
 
     /// Drops the samples no longer needed once time `t_us` is reached: every sample before the
     /// last one at or before `t_us`.
     pub fn forget_before(&mut self, t_us: u64) {
-        while self.samples.len() >= 2 && self.samples.iter().nth(1).is_some_and(|s| s.t_us <= t_us)
+        while self.samples.len() >= 2
+            && self
+                .samples
+                .iter()
+                .nth(1)
+                .is_some_and(|e| e.sample.t_us <= t_us)
         {
             self.samples.pop_front();
         }
+    }
+
+    /// Drops the oldest sample (`false` when there was none).
+    pub fn pop_oldest(&mut self) -> bool {
+        self.samples.pop_front().is_some()
     }
 
     /// Drops every sample.
@@ -162,6 +211,18 @@ mod tests {
         assert!(w.push(s(30, 2.0, 0.0)));
         w.forget_before(25);
         assert_eq!(w.len(), 2);
-        assert_eq!(w.samples.front().map(|s| s.t_us), Some(20));
+        assert_eq!(w.samples.front().map(|e| e.sample.t_us), Some(20));
+    }
+
+    #[test]
+    fn no_pose_is_interpolated_across_a_restart() {
+        let mut w = OdometryWindow::new();
+        assert!(w.push(s(1_000, 5.0, 0.0)));
+        w.restart();
+        assert!(w.push(s(3_000, 0.0, 0.0)));
+        let at = w.at(2_000, 10_000).unwrap();
+        assert_eq!((at.pose.x_m, at.stale, at.frame), (5.0, true, 0));
+        let at = w.at(3_000, 10_000).unwrap();
+        assert_eq!((at.pose.x_m, at.stale, at.frame), (0.0, true, 1));
     }
 }

@@ -249,7 +249,8 @@ pub fn build(log: &[LogScan], plan: &Plan, odometry_source: Odometry) -> Result<
                     wheels.drive(&previous, &now)
                 };
                 let m = Message::WheelTicks(WheelTicks {
-                    timestamp_us: t,
+                    // 0 would mean "on arrival" (docs/link-protocol.md): the first reading at 1 µs.
+                    timestamp_us: t.max(1),
                     left_ticks: left,
                     right_ticks: right,
                 });
@@ -257,7 +258,7 @@ pub fn build(log: &[LogScan], plan: &Plan, odometry_source: Odometry) -> Result<
             }
             (None, Some(poses)) => {
                 let m = Message::WheelOdometry(WheelOdometry {
-                    timestamp_us: t,
+                    timestamp_us: t.max(1),
                     pose: pose_at(scans.len(), |k| poses[k], t),
                 });
                 (m, [0, 0])
