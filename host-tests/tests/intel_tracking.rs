@@ -36,6 +36,7 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         adaptive_noise: None,
         kld: None,
         reset_per_update: 0,
+        clutter_share: 0.0,
     }
 }
 

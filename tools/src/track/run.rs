@@ -4,7 +4,7 @@ use crate::cmd::scored_log::MAX_BEAMS;
 use beamfield::field::{FieldView, FreeSpace, LikelihoodField, LikelihoodParams};
 use beamfield::mcl::{
     AdaptiveNoise, Kld, Mcl, MclConfig, MclError, OdometryNoise, OdometryStep, Particles, Quality,
-    Resetting, SplitMix64, Unexplained,
+    QualityThresholds, Resetting, SplitMix64, Unexplained,
 };
 use beamfield::{wrap_angle, BeamLayout, Pose, Reading, Scan, Tempered};
 use std::io::IsTerminal;
@@ -54,6 +54,8 @@ pub struct RunOptions {
     /// With `resetting`: the most free-space candidates scored per update
     /// (`Resetting::candidates_per_update`; 0 scores all at the update that starts the reset).
     pub reset_per_update: u32,
+    /// The quality signal's clutter allowance (`QualityThresholds::clutter_share`; 0: off).
+    pub clutter_share: f32,
     /// The adaptive motion noise (target, rate, smallest and largest variance scale,
     /// `MclConfig::with_adaptive_noise`); None: off.
     pub adaptive_noise: Option<[f32; 4]>,
@@ -332,6 +334,11 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         None => config,
     };
     let config = config
+        .with_quality(QualityThresholds {
+            clutter_share: o.clutter_share,
+            ..QualityThresholds::DEFAULT
+        })
+        .map_err(|e| usage(format!("--clutter-share: {e}")))?
         .with_unexplained(o.unexplained.map(|(distance_m, max_share)| Unexplained {
             distance_m,
             max_share,

@@ -157,6 +157,12 @@ pub struct TrackArgs {
     /// N each, Resetting::candidates_per_update).
     #[arg(long, default_value_t = 0, value_name = "N", requires = "resetting")]
     pub reset_per_update: u32,
+    /// The quality signal's clutter allowance: up to this share of a scan's beams (0 to below 1)
+    /// that end in front of a mapped wall the map does not explain are set aside before the
+    /// explained share is judged (QualityThresholds::clutter_share; 0, the default: off). 0.3
+    /// ends the false Lost on unmapped clutter but delays the Lost of a kidnapping.
+    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    pub clutter_share: f32,
     /// KLD sampling "MIN,MAX" (off by default; MclConfig::with_kld with nav2's pf_err 0.05,
     /// pf_z 0.99 and 0.5 m / 10° bins): the particles in use adapt at each resampling between
     /// MIN and MAX, starting from --particles.
@@ -248,6 +254,7 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
     };
     Ok(RunOptions {
         reset_per_update: args.reset_per_update,
+        clutter_share: args.clutter_share,
         adaptive_noise,
         kld,
         particles: args.particles,
