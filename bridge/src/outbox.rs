@@ -2,8 +2,19 @@
 //! has not acknowledged fills the writer's window and a write would block. The outbox keeps the
 //! newest message only (an older pose or transform is of no use once a newer one exists) and
 //! retries it on the next [`Outbox::flush`]; a message replaced before it went out is counted.
+//!
+//! It also publishes at most once per [`MIN_INTERVAL`]: a device that floods the link with
+//! estimates costs superseded messages, not a DDS writer history that grows faster than the
+//! middleware cleans it (a transient-local writer with no reader keeps what it was given until
+//! its periodic cleanup).
+
+use std::time::{Duration, Instant};
 
 use serde::Serialize;
+
+/// The shortest time between two messages of one topic: 5 ms, 200 Hz, twenty times the
+/// LiDAR's rate of estimates.
+pub const MIN_INTERVAL: Duration = Duration::from_millis(5);
 
 use crate::ros::{PublishError, RosError};
 
@@ -24,21 +35,27 @@ pub struct OutboxCounters {
 #[derive(Debug)]
 pub struct Outbox<M> {
     pending: Option<M>,
+    /// When the last message went out.
+    last: Option<Instant>,
+    interval: Duration,
     pub counters: OutboxCounters,
 }
 
 impl<M> Default for Outbox<M> {
     fn default() -> Self {
-        Self {
-            pending: None,
-            counters: OutboxCounters::default(),
-        }
+        Self::new(MIN_INTERVAL)
     }
 }
 
 impl<M> Outbox<M> {
-    pub fn new() -> Self {
-        Self::default()
+    /// An outbox that publishes at most once per `interval`.
+    pub fn new(interval: Duration) -> Self {
+        Self {
+            pending: None,
+            last: None,
+            interval,
+            counters: OutboxCounters::default(),
+        }
     }
 
     /// A message waiting to be retried.
@@ -46,30 +63,40 @@ impl<M> Outbox<M> {
         self.pending.is_some()
     }
 
-    /// Replaces any waiting message with `m` and tries to publish it. A failure other than a
-    /// full window is returned (the message is dropped).
+    /// Replaces any waiting message with `m` and tries to publish it at `now`. A failure
+    /// other than a full window is returned (the message is dropped).
     pub fn offer(
         &mut self,
         m: M,
+        now: Instant,
         publish: impl FnOnce(M) -> Result<(), PublishError<M>>,
     ) -> Result<(), RosError> {
         if self.pending.replace(m).is_some() {
             self.counters.superseded += 1;
         }
-        self.flush(publish)
+        self.flush(now, publish)
     }
 
-    /// Tries to publish the waiting message, if any.
+    /// Tries to publish the waiting message, if any, unless the last one went out less than
+    /// the interval before `now`.
     pub fn flush(
         &mut self,
+        now: Instant,
         publish: impl FnOnce(M) -> Result<(), PublishError<M>>,
     ) -> Result<(), RosError> {
+        if self
+            .last
+            .is_some_and(|l| now.saturating_duration_since(l) < self.interval)
+        {
+            return Ok(());
+        }
         let Some(m) = self.pending.take() else {
             return Ok(());
         };
         match publish(m) {
             Ok(()) => {
                 self.counters.published += 1;
+                self.last = Some(now);
                 Ok(())
             }
             Err(PublishError::WouldBlock(m)) => {
@@ -91,14 +118,15 @@ mod tests {
 
     #[test]
     fn a_full_window_keeps_the_newest_and_retries() {
-        let mut o = Outbox::new();
+        let mut o = Outbox::new(MIN_INTERVAL);
         let mut sent = Vec::new();
         let full = |m: u32| Err(PublishError::WouldBlock(Box::new(m)));
-        o.offer(1, full).unwrap();
-        o.offer(2, full).unwrap();
-        o.offer(3, full).unwrap();
+        let t = Instant::now();
+        o.offer(1, t, full).unwrap();
+        o.offer(2, t, full).unwrap();
+        o.offer(3, t, full).unwrap();
         assert!(o.is_pending());
-        o.flush(|m| {
+        o.flush(t, |m| {
             sent.push(m);
             Ok(())
         })
@@ -115,13 +143,40 @@ mod tests {
             }
         );
         // Nothing waiting: nothing is published.
-        o.flush(|_| panic!("nothing to publish")).unwrap();
+        o.flush(t + Duration::from_secs(1), |_| panic!("nothing to publish"))
+            .unwrap();
+    }
+
+    #[test]
+    fn at_most_one_message_per_interval() {
+        let mut o = Outbox::new(Duration::from_millis(5));
+        let mut sent = Vec::new();
+        let t = Instant::now();
+        let ms = |n: u64| t + Duration::from_millis(n);
+        for (k, at) in [(1, 0), (2, 1), (3, 4), (4, 5), (5, 6)] {
+            o.offer(k, ms(at), |m| {
+                sent.push(m);
+                Ok(())
+            })
+            .unwrap();
+        }
+        // 1 at 0 ms; 2 and 3 wait and are superseded; 4 at 5 ms; 5 waits.
+        assert_eq!(sent, vec![1, 4]);
+        assert!(o.is_pending());
+        o.flush(ms(10), |m| {
+            sent.push(m);
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(sent, vec![1, 4, 5]);
+        assert_eq!(o.counters.superseded, 2);
+        assert_eq!(o.counters.published, 3);
     }
 
     #[test]
     fn other_failures_drop_the_message_and_are_returned() {
-        let mut o = Outbox::new();
-        let e = o.offer(7u8, |_| {
+        let mut o = Outbox::new(MIN_INTERVAL);
+        let e = o.offer(7u8, Instant::now(), |_| {
             Err(PublishError::Failed(RosError("broken".into())))
         });
         assert_eq!(e.unwrap_err().0, "broken");

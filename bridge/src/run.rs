@@ -13,7 +13,7 @@ use serde::Serialize;
 use crate::clock::{ClockCounters, HostClock};
 use crate::convert::{self, Refused};
 use crate::msg::{TfMessage, Time};
-use crate::outbox::{Outbox, OutboxCounters};
+use crate::outbox::{self, Outbox, OutboxCounters};
 use crate::params::{Nav2Params, ParamsError};
 use crate::port::{Endpoint, Incoming, Port, PortError};
 use crate::ros::{NodeConfig, RosError, RosNode, ServiceCall};
@@ -119,7 +119,9 @@ pub struct BridgeReport {
     pub link_queue_dropped: u64,
     /// `--clock host`: what the clock model did (re-anchoring, refused stamps).
     pub clock: Option<ClockCounters>,
-    /// `amcl_pose`'s outbox: published, retried on a full window, superseded, failed.
+    /// `amcl_pose`'s outbox: published, retried on a full window, superseded (by a newer
+    /// estimate while held back: a full window, or less than [`outbox::MIN_INTERVAL`] since the
+    /// last), failed.
     pub amcl_pose_outbox: OutboxCounters,
     /// `/tf`'s outbox.
     pub tf_outbox: OutboxCounters,
@@ -395,8 +397,8 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
         ClockArg::Device => Stamper::Device,
     };
     let tolerance_ns = tolerance_ns(frames.transform_tolerance_s);
-    let mut poses: Outbox<crate::msg::PoseWithCovarianceStamped> = Outbox::new();
-    let mut transforms: Outbox<TfMessage> = Outbox::new();
+    let mut poses: Outbox<crate::msg::PoseWithCovarianceStamped> = Outbox::default();
+    let mut transforms: Outbox<TfMessage> = Outbox::default();
     let started = Instant::now();
     let mut progress = Instant::now();
     let count = |m: &mut BTreeMap<String, u64>, k: String| *m.entry(k).or_default() += 1;
@@ -411,12 +413,13 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
             r.exit_code = EXIT_STOPPED;
             break;
         }
-        // Messages a full window held back go out before newer ones are taken.
+        // Messages held back (a full window, the interval) go out before newer ones are taken.
+        let now = Instant::now();
         poses
-            .flush(|m| node.publish_pose(m))
+            .flush(now, |m| node.publish_pose(m))
             .unwrap_or_else(ros_failed);
         transforms
-            .flush(|m| node.publish_tf(m))
+            .flush(now, |m| node.publish_tf(m))
             .unwrap_or_else(ros_failed);
         let wait = if poses.is_pending() || transforms.is_pending() {
             Duration::from_millis(1)
@@ -443,9 +446,11 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                             Stamper::Device => device_time(e.timestamp_us),
                         };
                         poses
-                            .offer(convert::amcl_pose(&e, stamp, &frames.global), |m| {
-                                node.publish_pose(m)
-                            })
+                            .offer(
+                                convert::amcl_pose(&e, stamp, &frames.global),
+                                Instant::now(),
+                                |m| node.publish_pose(m),
+                            )
                             .unwrap_or_else(ros_failed);
                         if frames.tf_broadcast {
                             let t = convert::map_to_odom_transform(
@@ -459,6 +464,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                                     TfMessage {
                                         transforms: vec![t],
                                     },
+                                    Instant::now(),
                                     |m| node.publish_tf(m),
                                 )
                                 .unwrap_or_else(ros_failed);
@@ -563,12 +569,13 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
             );
         }
     }
-    // A last try for what a full window held back.
+    // A last try for what was held back.
+    let now = Instant::now() + outbox::MIN_INTERVAL;
     poses
-        .flush(|m| node.publish_pose(m))
+        .flush(now, |m| node.publish_pose(m))
         .unwrap_or_else(ros_failed);
     transforms
-        .flush(|m| node.publish_tf(m))
+        .flush(now, |m| node.publish_tf(m))
         .unwrap_or_else(ros_failed);
     r.poses = poses.counters.published;
     r.transforms = transforms.counters.published;
