@@ -55,7 +55,8 @@ pub enum Rmw {
 /// How device time becomes ROS time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ClockArg {
-    /// The computer's clock: device time plus the smallest offset seen (see `convert::Clock`).
+    /// The computer's clock: device time plus the smallest offset over a sliding window,
+    /// re-anchored on a confirmed jump (see `clock::HostClock`).
     Host,
     /// The device's clock as it is (µs since it started): for replays with `use_sim_time`.
     Device,
