@@ -1,6 +1,7 @@
 //! Between the link's messages and ROS 2's: the estimate as `amcl_pose` and as the map → odom
-//! transform nav2_amcl broadcasts, `initialpose` as the device's `SetInitialPose`, and the
-//! device's clock on ROS time. Pure functions; every refusal is a [`Refused`].
+//! transform nav2_amcl broadcasts, `initialpose` as the device's `SetInitialPose`. Stamps are
+//! the caller's ([`crate::clock`] puts the device's clock on the computer's). Pure functions;
+//! every refusal is a [`Refused`].
 
 use beamfield::link::{Estimate, SetInitialPose};
 use beamfield::Pose as DevicePose;
@@ -37,36 +38,6 @@ impl std::fmt::Display for Refused {
             Self::Orientation => f.write_str("the orientation is not finite or has zero length"),
             Self::Covariance => {
                 f.write_str("the covariance has a non-finite entry or a negative variance")
-            }
-        }
-    }
-}
-
-/// The device's clock (µs since it started) on ROS time.
-///
-/// `Host` maps it onto the computer's clock: the offset is the smallest
-/// `host time at arrival − device time` seen so far, so that transmission delays do not push
-/// stamps later, and it only decreases (a stamp is never later than when the message arrived).
-/// `Device` keeps the device's time as is (for replays with `use_sim_time`, or when the device
-/// is synchronised to the computer's clock).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Clock {
-    Host { offset_ns: Option<i128> },
-    Device,
-}
-
-impl Clock {
-    /// Takes a message stamped `device_us` that arrived at `host_ns` (ns since the Unix epoch)
-    /// and returns its ROS time.
-    pub fn stamp(&mut self, device_us: u64, host_ns: u64) -> Time {
-        let device_ns = i128::from(device_us) * 1000;
-        match self {
-            Self::Device => Time::from_nanos(device_ns as u64),
-            Self::Host { offset_ns } => {
-                let seen = i128::from(host_ns) - device_ns;
-                let off = offset_ns.map_or(seen, |o| o.min(seen));
-                *offset_ns = Some(off);
-                Time::from_nanos((device_ns + off).clamp(0, i128::from(u64::MAX)) as u64)
             }
         }
     }
@@ -327,20 +298,5 @@ mod tests {
             set_initial_pose(&initialpose("map", 1.0, q, bad), "map"),
             Err(Refused::Covariance)
         );
-    }
-
-    #[test]
-    fn host_clock_takes_the_smallest_delay() {
-        let mut c = Clock::Host { offset_ns: None };
-        // Device at 1 s arrives at host 100 s + 5 ms; then device 2 s at host 101 s + 1 ms.
-        let t1 = c.stamp(1_000_000, 100_005_000_000);
-        assert_eq!(t1.to_nanos(), Some(100_005_000_000));
-        let t2 = c.stamp(2_000_000, 101_001_000_000);
-        assert_eq!(t2.to_nanos(), Some(101_001_000_000));
-        // Later stamps use the smaller offset (99.001 s).
-        let t3 = c.stamp(3_000_000, 102_500_000_000);
-        assert_eq!(t3.to_nanos(), Some(102_001_000_000));
-        let mut d = Clock::Device;
-        assert_eq!(d.stamp(1_500_000, 7).to_nanos(), Some(1_500_000_000));
     }
 }

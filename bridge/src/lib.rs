@@ -4,16 +4,25 @@
 //! `/tf`, `initialpose` and nav2_amcl's two services to the device.
 //!
 //! - [`msg`]: the ROS 2 messages, laid out as CDR has them;
-//! - [`convert`]: link messages to ROS messages and back, the device's clock on ROS time;
+//! - [`clock`]: the device's clock on the computer's (`--clock host`);
+//! - [`convert`]: link messages to ROS messages and back;
+//! - [`outbox`]: the newest message of a topic while the DDS writer's window is full;
+//! - [`queue`]: the bounded queue between the link's reader and the bridge's loop;
 //! - [`params`]: a nav2 params file's amcl section;
 //! - [`port`]: the link's bytes;
 //! - [`ros`]: the ROS 2 node.
 
+pub mod clock;
 pub mod convert;
 pub mod msg;
+pub mod outbox;
 pub mod params;
 pub mod port;
+pub mod queue;
 pub mod ros;
 mod run;
 
-pub use run::{run, BridgeArgs, BridgeError, BridgeReport};
+pub use run::{
+    parse_seconds, run, BridgeArgs, BridgeError, BridgeReport, ClockArg, Rmw, EXIT_CANNOT_START,
+    EXIT_LINK_LOST, EXIT_STOPPED, EXIT_USAGE, REFUSED_EXAMPLES,
+};

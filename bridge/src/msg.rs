@@ -14,12 +14,20 @@ pub struct Time {
 }
 
 impl Time {
-    /// The time `ns` nanoseconds after the epoch (saturating at `i32::MAX` seconds, in 2038).
+    /// The latest time this type holds: `i32::MAX` s and 999,999,999 ns (in 2038).
+    pub const MAX: Self = Self {
+        sec: i32::MAX,
+        nanosec: 999_999_999,
+    };
+
+    /// The time `ns` nanoseconds after the epoch, saturating at [`Time::MAX`].
     pub fn from_nanos(ns: u64) -> Self {
-        let sec = (ns / 1_000_000_000).min(i32::MAX as u64) as i32;
-        Self {
-            sec,
-            nanosec: (ns % 1_000_000_000) as u32,
+        match i32::try_from(ns / 1_000_000_000) {
+            Ok(sec) => Self {
+                sec,
+                nanosec: (ns % 1_000_000_000) as u32,
+            },
+            Err(_) => Self::MAX,
         }
     }
 
@@ -245,5 +253,9 @@ mod tests {
             .to_nanos(),
             None
         );
+        assert_eq!(Time::from_nanos(u64::MAX), Time::MAX);
+        let last = u64::try_from(i32::MAX).unwrap() * 1_000_000_000 + 999_999_999;
+        assert_eq!(Time::from_nanos(last), Time::MAX);
+        assert_eq!(Time::from_nanos(last + 1), Time::MAX);
     }
 }

@@ -1,14 +1,18 @@
 //! The device's end of the link on the computer: a serial port, or a TCP connection (an
 //! emulator's UART, `cargo xtask robot --bridge-port`). A thread reads and decodes the frames
 //! (`beamfield::link::Decoder`) as they come; the caller sends frames with `beamfield`'s
-//! encoder.
+//! encoder. Between the reader and the caller is a bounded queue
+//! ([`LINK_QUEUE_CAPACITY`](crate::queue::LINK_QUEUE_CAPACITY) entries): when the caller falls
+//! behind, the oldest entries are dropped and counted ([`Port::dropped`]).
 
 use std::io::{Read, Write};
 use std::net::TcpStream;
-use std::sync::mpsc::{self, Receiver};
+use std::sync::Arc;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use beamfield::link::{Decoder, Encoder, LinkError, LinkStats, Message, MAX_WIRE_LEN};
+
+use crate::queue::{Bounded, LINK_QUEUE_CAPACITY};
 
 /// Where the device is.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,7 +55,7 @@ pub fn now_ns() -> u64 {
 
 /// An open link.
 pub struct Port {
-    incoming: Receiver<Incoming>,
+    incoming: Arc<Bounded<Incoming>>,
     writer: Box<dyn Write + Send>,
     encoder: Encoder,
     /// Frames sent.
@@ -79,13 +83,13 @@ impl std::fmt::Display for PortError {
 
 impl std::error::Error for PortError {}
 
-fn reader_thread(mut r: Box<dyn Read + Send>, tx: mpsc::Sender<Incoming>) {
+fn reader_thread(mut r: Box<dyn Read + Send>, tx: Arc<Bounded<Incoming>>) {
     let mut decoder = Decoder::new();
     let mut buf = [0u8; 512];
     loop {
         let n = match r.read(&mut buf) {
             Ok(0) => {
-                let _ = tx.send(Incoming::Closed {
+                tx.push(Incoming::Closed {
                     error: None,
                     stats: decoder.stats(),
                 });
@@ -103,7 +107,7 @@ fn reader_thread(mut r: Box<dyn Read + Send>, tx: mpsc::Sender<Incoming>) {
                 continue
             }
             Err(e) => {
-                let _ = tx.send(Incoming::Closed {
+                tx.push(Incoming::Closed {
                     error: Some(e),
                     stats: decoder.stats(),
                 });
@@ -121,10 +125,17 @@ fn reader_thread(mut r: Box<dyn Read + Send>, tx: mpsc::Sender<Incoming>) {
                 },
                 Err(e) => Incoming::Refused(e),
             };
-            if tx.send(item).is_err() {
+            if !tx.push(item) {
                 return;
             }
         }
+    }
+}
+
+impl Drop for Port {
+    fn drop(&mut self) {
+        // The reader stops at its next read.
+        self.incoming.abandon();
     }
 }
 
@@ -148,7 +159,8 @@ impl Port {
                 (Box::new(r), Box::new(p))
             }
         };
-        let (tx, incoming) = mpsc::channel();
+        let incoming = Arc::new(Bounded::new(LINK_QUEUE_CAPACITY));
+        let tx = Arc::clone(&incoming);
         std::thread::Builder::new()
             .name("device link".into())
             .spawn(move || reader_thread(reader, tx))
@@ -162,13 +174,15 @@ impl Port {
     }
 
     /// What has arrived, waiting at most `timeout` for the first item.
+    /// At most [`LINK_QUEUE_CAPACITY`] items.
     pub fn receive(&self, timeout: Duration) -> Vec<Incoming> {
-        let mut out = Vec::new();
-        if let Ok(first) = self.incoming.recv_timeout(timeout) {
-            out.push(first);
-            out.extend(self.incoming.try_iter());
-        }
-        out
+        self.incoming.take_all(timeout)
+    }
+
+    /// Items the reader dropped because the caller was [`LINK_QUEUE_CAPACITY`] items behind
+    /// (the oldest go first).
+    pub fn dropped(&self) -> u64 {
+        self.incoming.dropped()
     }
 
     /// Encodes and sends one message (a whole frame in one write).

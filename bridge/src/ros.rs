@@ -67,6 +67,33 @@ impl std::fmt::Display for RosError {
 
 impl std::error::Error for RosError {}
 
+/// A message not published.
+#[derive(Debug)]
+pub enum PublishError<M> {
+    /// The writer's window is full (a reliable reader has not acknowledged yet): the message
+    /// is handed back to be retried ([`crate::outbox::Outbox`]).
+    WouldBlock(Box<M>),
+    /// Any other failure.
+    Failed(RosError),
+}
+
+fn publish_error<M>(what: &str, e: ros2_client::WriteError<M>) -> PublishError<M> {
+    match e {
+        ros2_client::WriteError::WouldBlock { data } => PublishError::WouldBlock(Box::new(data)),
+        other => PublishError::Failed(RosError(format!(
+            "{what}: {}",
+            match other {
+                ros2_client::WriteError::Serialization { reason, .. }
+                | ros2_client::WriteError::Poisoned { reason, .. }
+                | ros2_client::WriteError::Internal { reason }
+                | ros2_client::WriteError::Middleware { reason, .. } => reason,
+                ros2_client::WriteError::Io(e) => e.to_string(),
+                ros2_client::WriteError::WouldBlock { .. } => "would block".into(),
+            }
+        ))),
+    }
+}
+
 fn err<E: std::fmt::Debug>(what: &str) -> impl FnOnce(E) -> RosError + '_ {
     move |e| RosError(format!("{what}: {e:?}"))
 }
@@ -98,12 +125,14 @@ impl RosNode {
         let mut node = context
             .new_node(node_name, NodeOptions::new())
             .map_err(err("the node"))?;
+        // The publishers never wait for a full window: the write is refused at once and the
+        // bridge's outbox retries the newest message (crate::outbox).
         let latched = QosProfile::publisher_default()
-            .reliability_reliable(WhenFull::DEFAULT)
+            .reliability_reliable(WhenFull::Fail)
             .durability(Durability::TransientLocal)
             .history(History::KeepLast { depth: 1 });
         let tf_qos = QosProfile::publisher_default()
-            .reliability_reliable(WhenFull::DEFAULT)
+            .reliability_reliable(WhenFull::Fail)
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 100 });
         let sub_qos = QosProfile::publisher_default()
@@ -160,16 +189,21 @@ impl RosNode {
         })
     }
 
-    /// Publishes an estimate.
-    pub fn publish_pose(&self, m: PoseWithCovarianceStamped) -> Result<(), RosError> {
+    /// Publishes an estimate; a full window hands it back.
+    pub fn publish_pose(
+        &self,
+        m: PoseWithCovarianceStamped,
+    ) -> Result<(), PublishError<PoseWithCovarianceStamped>> {
         self.amcl_pose
             .publish(m)
-            .map_err(err("publishing amcl_pose"))
+            .map_err(|e| publish_error("publishing amcl_pose", e))
     }
 
-    /// Publishes a `/tf` message.
-    pub fn publish_tf(&self, m: TfMessage) -> Result<(), RosError> {
-        self.tf.publish(m).map_err(err("publishing /tf"))
+    /// Publishes a `/tf` message; a full window hands it back.
+    pub fn publish_tf(&self, m: TfMessage) -> Result<(), PublishError<TfMessage>> {
+        self.tf
+            .publish(m)
+            .map_err(|e| publish_error("publishing /tf", e))
     }
 
     /// The `initialpose` messages that arrived; a sample that could not be read is an `Err`

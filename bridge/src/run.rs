@@ -1,5 +1,6 @@
 //! The bridge's loop: the device's frames out to ROS 2, ROS 2's requests in to the device,
-//! until the link ends (or `--seconds`), then one report.
+//! until the link ends (or `--seconds`), then one report and an exit code
+//! ([`BridgeReport::exit_code`], [`BridgeError::exit_code`]).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -9,11 +10,38 @@ use beamfield::link::{EstimateFlags, Heartbeat, Message};
 use ros2_client::ServiceMapping;
 use serde::Serialize;
 
-use crate::convert::{self, Clock};
-use crate::msg::TfMessage;
+use crate::clock::{ClockCounters, HostClock};
+use crate::convert::{self, Refused};
+use crate::msg::{TfMessage, Time};
+use crate::outbox::{self, Outbox, OutboxCounters};
 use crate::params::{Nav2Params, ParamsError};
 use crate::port::{Endpoint, Incoming, Port, PortError};
 use crate::ros::{NodeConfig, RosError, RosNode, ServiceCall};
+
+/// Exit code: the bridge ran for `--seconds` and stopped.
+pub const EXIT_STOPPED: u8 = 0;
+/// Exit code: the bridge could not start (the link, the DDS participant, the params file).
+pub const EXIT_CANNOT_START: u8 = 1;
+/// Exit code: a usage error (an option's value).
+pub const EXIT_USAGE: u8 = 2;
+/// Exit code: the link ended (end of stream, a read or write error, a serial hang-up).
+pub const EXIT_LINK_LOST: u8 = 3;
+
+/// Examples of refused frames kept in the report (the counts by kind cover all of them).
+pub const REFUSED_EXAMPLES: usize = 8;
+
+/// `--seconds`: a positive number of seconds (`inf`, or more than a `Duration` holds: no
+/// limit).
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number of seconds"))?;
+    if v.is_nan() || v <= 0.0 {
+        return Err(format!("{s}: a positive number of seconds"));
+    }
+    Ok(v)
+}
 
 /// Which RMW the ROS 2 peers use: it decides how services map onto DDS.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -27,7 +55,8 @@ pub enum Rmw {
 /// How device time becomes ROS time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ClockArg {
-    /// The computer's clock: device time plus the smallest offset seen (see `convert::Clock`).
+    /// The computer's clock: device time plus the smallest offset over a sliding window,
+    /// re-anchored on a confirmed jump (see `clock::HostClock`).
     Host,
     /// The device's clock as it is (µs since it started): for replays with `use_sim_time`.
     Device,
@@ -62,8 +91,9 @@ pub struct BridgeArgs {
     /// How device time becomes the messages' stamps.
     #[arg(long, value_enum, default_value_t = ClockArg::Host)]
     pub clock: ClockArg,
-    /// Stop after this many seconds (default: when the link ends).
-    #[arg(long, value_name = "S")]
+    /// Stop after this many seconds (default: when the link ends). More than the computer's
+    /// clock holds, or `inf`, is no limit.
+    #[arg(long, value_name = "S", value_parser = parse_seconds)]
     pub seconds: Option<f64>,
 }
 
@@ -80,8 +110,22 @@ pub struct BridgeReport {
     /// Estimates not published: the filter was not initialized.
     pub uninitialized: u64,
     pub heartbeats: u64,
-    /// Frames the decoder refused (CRC, length, range …), by cause.
+    /// Frames the decoder refused (CRC, length, range …) and messages the bridge does not
+    /// take, counted by kind.
     pub link_refused: BTreeMap<String, u64>,
+    /// The first [`REFUSED_EXAMPLES`] of them, in full.
+    pub link_refused_examples: Vec<String>,
+    /// Link items dropped because the bridge's loop fell [`crate::queue::LINK_QUEUE_CAPACITY`]
+    /// items behind the link (the oldest go first).
+    pub link_queue_dropped: u64,
+    /// `--clock host`: what the clock model did (re-anchoring, refused stamps).
+    pub clock: Option<ClockCounters>,
+    /// `amcl_pose`'s outbox: published, retried on a full window, superseded (by a newer
+    /// estimate while held back: a full window, or less than [`outbox::MIN_INTERVAL`] since the
+    /// last), failed.
+    pub amcl_pose_outbox: OutboxCounters,
+    /// `/tf`'s outbox.
+    pub tf_outbox: OutboxCounters,
     /// Error reports from the device, by code.
     pub device_errors: BTreeMap<String, u64>,
     pub initial_poses_sent: u64,
@@ -96,6 +140,33 @@ pub struct BridgeReport {
     pub seconds: f64,
     /// Why the bridge stopped.
     pub ended: String,
+    /// The process's exit code for this end ([`EXIT_STOPPED`] or [`EXIT_LINK_LOST`]).
+    pub exit_code: u8,
+}
+
+impl BridgeReport {
+    /// The exit code a supervisor sees: [`EXIT_STOPPED`] after `--seconds`, [`EXIT_LINK_LOST`]
+    /// when the link ended.
+    pub fn exit_code(&self) -> u8 {
+        self.exit_code
+    }
+
+    fn refuse(&mut self, kind: String, example: impl FnOnce() -> String) {
+        *self.link_refused.entry(kind).or_default() += 1;
+        if self.link_refused_examples.len() < REFUSED_EXAMPLES {
+            self.link_refused_examples.push(example());
+        }
+    }
+}
+
+/// A refusal's kind: its Debug name without the fields (`WrongLength { .. }` → `WrongLength`).
+fn kind_of(debug: &str) -> String {
+    debug
+        .split(['(', '{', ' '])
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_owned()
 }
 
 /// A heartbeat, for the report.
@@ -128,8 +199,8 @@ impl std::fmt::Display for BridgeReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             f,
-            "bridge: {} for {:.1} s, ended: {}",
-            self.link, self.seconds, self.ended
+            "bridge: {} for {:.1} s, ended: {} (exit code {})",
+            self.link, self.seconds, self.ended, self.exit_code
         )?;
         writeln!(
             f,
@@ -157,6 +228,31 @@ impl std::fmt::Display for BridgeReport {
             list(&self.initial_poses_refused)
         )?;
         writeln!(f, "link frames refused: {}", list(&self.link_refused))?;
+        for e in &self.link_refused_examples {
+            writeln!(f, "  e.g. {e}")?;
+        }
+        writeln!(
+            f,
+            "link queue: {} items dropped (the bridge fell behind)",
+            self.link_queue_dropped
+        )?;
+        if let Some(c) = &self.clock {
+            writeln!(
+                f,
+                "clock: {} jumps forward, {} jumps back, {} restarts, {} outliers dropped, {} held while confirming, {} non-increasing stamps refused",
+                c.jump_forward, c.jump_back, c.restart, c.outlier_dropped, c.held_confirming, c.non_increasing_refused
+            )?;
+        }
+        for (name, o) in [
+            ("amcl_pose", &self.amcl_pose_outbox),
+            ("/tf", &self.tf_outbox),
+        ] {
+            writeln!(
+                f,
+                "{name}: {} published, {} writes retried on a full window, {} superseded, {} failed",
+                o.published, o.would_block, o.superseded, o.failed
+            )?;
+        }
         writeln!(f, "device error reports: {}", list(&self.device_errors))?;
         if let Some(h) = &self.last_heartbeat {
             writeln!(
@@ -201,7 +297,42 @@ impl std::fmt::Display for BridgeError {
 
 impl std::error::Error for BridgeError {}
 
-/// Runs the bridge until the link ends or `args.seconds` pass; progress lines on stderr.
+impl BridgeError {
+    /// [`EXIT_USAGE`] for a usage error, [`EXIT_CANNOT_START`] otherwise.
+    pub fn exit_code(&self) -> u8 {
+        match self {
+            Self::Usage(_) => EXIT_USAGE,
+            _ => EXIT_CANNOT_START,
+        }
+    }
+}
+
+/// How device time becomes stamps.
+enum Stamper {
+    Host(HostClock),
+    Device,
+}
+
+/// The device's time, µs, as a stamp on its own clock (saturating at [`Time::MAX`]).
+fn device_time(device_us: u64) -> Time {
+    Time::from_nanos(device_us.saturating_mul(1000))
+}
+
+/// `transform_tolerance`, seconds, in ns (saturating: more than u64 holds is `u64::MAX`).
+fn tolerance_ns(s: f64) -> u64 {
+    Duration::try_from_secs_f64(s).map_or(if s > 0.0 { u64::MAX } else { 0 }, |d| {
+        u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
+    })
+}
+
+/// The transform's stamp: the pose's plus the tolerance, saturating at [`Time::MAX`].
+fn post_dated(stamp: Time, tolerance_ns: u64) -> Time {
+    Time::from_nanos(stamp.to_nanos().unwrap_or(0).saturating_add(tolerance_ns))
+}
+
+/// Runs the bridge until the link ends or `args.seconds` pass; progress lines on stderr. An
+/// `Err` is a bridge that could not start; once running, it ends with a report whose
+/// [`BridgeReport::exit_code`] says why.
 pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let endpoint = match (&args.connect, &args.serial) {
         (Some(a), None) => Endpoint::Tcp(a.clone()),
@@ -216,12 +347,16 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
         }
     };
     if let Some(s) = args.seconds {
-        if !(s.is_finite() && s > 0.0) {
+        if s.is_nan() || s <= 0.0 {
             return Err(BridgeError::Usage(format!(
                 "--seconds {s}: a positive number of seconds"
             )));
         }
     }
+    // More seconds than a Duration holds (or inf): no limit.
+    let limit = args
+        .seconds
+        .and_then(|s| Duration::try_from_secs_f64(s).ok());
     let params = match &args.params {
         Some(p) => Nav2Params::read(p).map_err(BridgeError::Params)?,
         None => Nav2Params::default(),
@@ -259,20 +394,40 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
         r.initial_poses_sent += 1;
     }
     let mut clock = match args.clock {
-        ClockArg::Host => Clock::Host { offset_ns: None },
-        ClockArg::Device => Clock::Device,
+        ClockArg::Host => Stamper::Host(HostClock::new()),
+        ClockArg::Device => Stamper::Device,
     };
-    let tolerance_ns = (frames.transform_tolerance_s * 1e9) as u64;
+    let tolerance_ns = tolerance_ns(frames.transform_tolerance_s);
+    let mut poses: Outbox<crate::msg::PoseWithCovarianceStamped> = Outbox::default();
+    let mut transforms: Outbox<TfMessage> = Outbox::default();
     let started = Instant::now();
     let mut progress = Instant::now();
-    let limit = args.seconds.map(Duration::from_secs_f64);
     let count = |m: &mut BTreeMap<String, u64>, k: String| *m.entry(k).or_default() += 1;
+    let ros_failed = |e: RosError| eprintln!("bridge: {e}");
+    let lost = |r: &mut BridgeReport, e: PortError| {
+        r.ended = format!("the link was lost: {e}");
+        r.exit_code = EXIT_LINK_LOST;
+    };
     'run: loop {
         if limit.is_some_and(|l| started.elapsed() >= l) {
             r.ended = "the time given with --seconds passed".into();
+            r.exit_code = EXIT_STOPPED;
             break;
         }
-        for item in port.receive(Duration::from_millis(10)) {
+        // Messages held back (a full window, the interval) go out before newer ones are taken.
+        let now = Instant::now();
+        poses
+            .flush(now, |m| node.publish_pose(m))
+            .unwrap_or_else(ros_failed);
+        transforms
+            .flush(now, |m| node.publish_tf(m))
+            .unwrap_or_else(ros_failed);
+        let wait = if poses.is_pending() || transforms.is_pending() {
+            Duration::from_millis(1)
+        } else {
+            Duration::from_millis(10)
+        };
+        for item in port.receive(wait) {
             match item {
                 Incoming::Frame {
                     message,
@@ -283,25 +438,37 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                             r.uninitialized += 1;
                             continue;
                         }
-                        let stamp = clock.stamp(e.timestamp_us, arrival_ns);
-                        node.publish_pose(convert::amcl_pose(&e, stamp, &frames.global))
-                            .map_err(BridgeError::Ros)?;
-                        r.poses += 1;
+                        let stamp = match &mut clock {
+                            Stamper::Host(c) => match c.stamp(e.timestamp_us, arrival_ns) {
+                                Ok(t) => t,
+                                // Counted by the clock.
+                                Err(_) => continue,
+                            },
+                            Stamper::Device => device_time(e.timestamp_us),
+                        };
+                        poses
+                            .offer(
+                                convert::amcl_pose(&e, stamp, &frames.global),
+                                Instant::now(),
+                                |m| node.publish_pose(m),
+                            )
+                            .unwrap_or_else(ros_failed);
                         if frames.tf_broadcast {
-                            let post = crate::msg::Time::from_nanos(
-                                stamp.to_nanos().unwrap_or(0) + tolerance_ns,
-                            );
                             let t = convert::map_to_odom_transform(
                                 &e,
-                                post,
+                                post_dated(stamp, tolerance_ns),
                                 &frames.global,
                                 &frames.odom,
                             );
-                            node.publish_tf(TfMessage {
-                                transforms: vec![t],
-                            })
-                            .map_err(BridgeError::Ros)?;
-                            r.transforms += 1;
+                            transforms
+                                .offer(
+                                    TfMessage {
+                                        transforms: vec![t],
+                                    },
+                                    Instant::now(),
+                                    |m| node.publish_tf(m),
+                                )
+                                .unwrap_or_else(ros_failed);
                         }
                     }
                     Message::Heartbeat(h) => {
@@ -315,25 +482,23 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                         );
                         count(&mut r.device_errors, format!("{:?}", e.code));
                     }
-                    other => count(
-                        &mut r.link_refused,
-                        format!("unexpected {:?}", other.message_type()),
-                    ),
+                    other => {
+                        let t = other.message_type();
+                        r.refuse(format!("unexpected {t:?}"), || {
+                            format!("unexpected {other:?}")
+                        });
+                    }
                 },
-                Incoming::Refused(e) => count(
-                    &mut r.link_refused,
-                    format!("{e:?}")
-                        .split('(')
-                        .next()
-                        .unwrap_or("")
-                        .trim()
-                        .to_owned(),
-                ),
+                Incoming::Refused(e) => {
+                    let d = format!("{e:?}");
+                    r.refuse(kind_of(&d), || d);
+                }
                 Incoming::Closed { error, .. } => {
                     r.ended = match error {
                         None => "the device closed the link".into(),
                         Some(e) => format!("reading the link failed: {e}"),
                     };
+                    r.exit_code = EXIT_LINK_LOST;
                     break 'run;
                 }
             }
@@ -357,11 +522,19 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                             "out of the link's range".into(),
                         );
                     }
-                    Err(e) => return Err(BridgeError::Port(e)),
+                    Err(e) => {
+                        lost(&mut r, e);
+                        break 'run;
+                    }
                 },
                 Err(why) => {
                     eprintln!("bridge: initialpose not sent: {why}");
-                    count(&mut r.initial_poses_refused, why.to_string());
+                    // By kind: a frame name is the sender's and has no bound.
+                    let key = match why {
+                        Refused::WrongFrame { .. } => "the frame is not the global frame".into(),
+                        other => other.to_string(),
+                    };
+                    count(&mut r.initial_poses_refused, key);
                 }
             }
         }
@@ -380,20 +553,100 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                     continue;
                 }
             };
-            port.send(&message).map_err(BridgeError::Port)?;
+            if let Err(e) = port.send(&message) {
+                lost(&mut r, e);
+                break 'run;
+            }
         }
         if progress.elapsed() >= Duration::from_secs(5) {
             progress = Instant::now();
             eprintln!(
-                "bridge: {:.0} s: {} poses published, {} heartbeats, {} frames to the device",
+                "bridge: {:.0} s: {} poses published, {} heartbeats, {} frames to the device, {} link items dropped",
                 started.elapsed().as_secs_f64(),
-                r.poses,
+                poses.counters.published,
                 r.heartbeats,
-                port.sent
+                port.sent,
+                port.dropped()
             );
         }
     }
+    // A last try for what was held back.
+    let now = Instant::now() + outbox::MIN_INTERVAL;
+    poses
+        .flush(now, |m| node.publish_pose(m))
+        .unwrap_or_else(ros_failed);
+    transforms
+        .flush(now, |m| node.publish_tf(m))
+        .unwrap_or_else(ros_failed);
+    r.poses = poses.counters.published;
+    r.transforms = transforms.counters.published;
+    r.amcl_pose_outbox = poses.counters;
+    r.tf_outbox = transforms.counters;
+    if let Stamper::Host(c) = &clock {
+        r.clock = Some(c.counters);
+    }
+    r.link_queue_dropped = port.dropped();
     r.frames_sent = port.sent;
     r.seconds = started.elapsed().as_secs_f64();
     Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seconds_must_be_positive() {
+        for bad in ["NaN", "nan", "0", "-1", "-inf", "x", ""] {
+            assert!(parse_seconds(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_seconds("2.5"), Ok(2.5));
+        // No limit, not a panic.
+        assert_eq!(parse_seconds("inf"), Ok(f64::INFINITY));
+        assert_eq!(parse_seconds("1e30"), Ok(1e30));
+        assert!(Duration::try_from_secs_f64(1e30).is_err());
+    }
+
+    #[test]
+    fn the_transform_tolerance_saturates() {
+        assert_eq!(tolerance_ns(1.0), 1_000_000_000);
+        assert_eq!(tolerance_ns(0.0), 0);
+        assert_eq!(tolerance_ns(1e300), u64::MAX);
+        assert_eq!(tolerance_ns(f64::INFINITY), u64::MAX);
+        let pose = Time {
+            sec: 1_700_000_000,
+            nanosec: 5,
+        };
+        assert_eq!(post_dated(pose, u64::MAX), Time::MAX);
+        assert_eq!(
+            post_dated(pose, 500_000_000),
+            Time {
+                sec: 1_700_000_000,
+                nanosec: 500_000_005
+            }
+        );
+        // Never before the pose.
+        assert_eq!(post_dated(Time::MAX, 1), Time::MAX);
+        assert_eq!(device_time(u64::MAX), Time::MAX);
+    }
+
+    #[test]
+    fn refusals_are_counted_by_kind_with_a_few_examples() {
+        let mut r = BridgeReport::default();
+        for seq in 0..1000u16 {
+            let e = beamfield::link::LinkError::WrongLength {
+                msg_type: 0x81,
+                seq,
+                len: 3,
+            };
+            let d = format!("{e:?}");
+            r.refuse(kind_of(&d), || d);
+        }
+        r.refuse(kind_of("BadCrc"), || "BadCrc".into());
+        assert_eq!(r.link_refused.len(), 2);
+        assert_eq!(r.link_refused["WrongLength"], 1000);
+        assert_eq!(r.link_refused["BadCrc"], 1);
+        assert_eq!(r.link_refused_examples.len(), REFUSED_EXAMPLES);
+        assert!(r.link_refused_examples[7].contains("seq: 7"));
+    }
 }

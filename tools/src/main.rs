@@ -68,7 +68,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         #[cfg(feature = "bridge")]
-        Command::Bridge(args) => finish("beamfield bridge", beamfield_bridge::run(&args), cli.json),
+        Command::Bridge(args) => bridge(&args, cli.json),
         Command::Info => finish(
             "beamfield info",
             Ok::<_, std::convert::Infallible>(beamfield_tools::cmd::info::run()),
@@ -121,6 +121,27 @@ fn main() -> ExitCode {
             beamfield_tools::cmd::lidar::run(&cmd),
             cli.json,
         ),
+    }
+}
+
+/// `beamfield bridge`: its report as every command's, and its own exit codes (docs/nav2.md,
+/// "Exit codes and the report's counters"): 0 stopped after `--seconds`, 1 could not start,
+/// 2 usage error, 3 link lost.
+#[cfg(feature = "bridge")]
+fn bridge(args: &beamfield_bridge::BridgeArgs, json: bool) -> ExitCode {
+    match beamfield_bridge::run(args) {
+        Ok(report) => {
+            let code = report.exit_code();
+            if finish("beamfield bridge", Ok::<_, String>(report), json) == ExitCode::SUCCESS {
+                ExitCode::from(code)
+            } else {
+                ExitCode::from(beamfield_bridge::EXIT_CANNOT_START)
+            }
+        }
+        Err(e) => {
+            eprintln!("beamfield bridge: {e}");
+            ExitCode::from(e.exit_code())
+        }
     }
 }
 

@@ -21,6 +21,9 @@ pub const CYCLONEDDS_LOOPBACK: &str = "<CycloneDDS><Domain><General><Interfaces>
 
 /// A DDS domain of its own, so that a ROS 2 system on this host is not disturbed.
 const DOMAIN: &str = "42";
+/// `beamfield bridge`'s exit code when its link ends (docs/nav2.md).
+const BRIDGE_LINK_LOST: i32 = 3;
+
 /// Seconds the peer and the bridge may run.
 const TIMEOUT_S: u64 = 900;
 
@@ -161,9 +164,11 @@ pub fn ros2(scans: usize) -> Result {
         }
     }
     robot_result?;
-    if bridge_code != Some(0) {
+    // The robot's end closes the link: the bridge's exit code for a lost link is 3
+    // (docs/nav2.md, "Exit codes and the report's counters").
+    if bridge_code != Some(BRIDGE_LINK_LOST) {
         return Err(Error::Requirement(format!(
-            "the bridge ended with {bridge_code:?} (see its output above)"
+            "the bridge ended with {bridge_code:?}, not {BRIDGE_LINK_LOST} (the link closed when the robot ended; see its output above)"
         )));
     }
     if peer_code != Some(0) {

@@ -1,0 +1,174 @@
+//! `beamfield bridge`'s exit codes as a supervisor sees them, and options that must not panic:
+//! the bridge runs against a fake device on a TCP port of 127.0.0.1, with DDS on 127.0.0.1.
+//! 0: ran for `--seconds`; 1: could not start; 2: usage error; 3: the link was lost.
+
+#![cfg(feature = "bridge")]
+
+use std::io::Write;
+use std::net::TcpListener;
+use std::process::Output;
+use std::time::Duration;
+
+use beamfield::link::{Encoder, Estimate, EstimateFlags, Message, MAX_WIRE_LEN};
+use beamfield::Pose;
+
+mod common;
+use common::bin;
+
+/// A device that sends `n` initialized estimates 20 ms apart, then keeps the link open for
+/// `hold` and closes it. Returns its address.
+fn device(n: u64, hold: Duration) -> (String, std::thread::JoinHandle<()>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let h = std::thread::spawn(move || {
+        let (mut s, _) = listener.accept().unwrap();
+        let mut enc = Encoder::new();
+        for k in 0..n {
+            let m = Message::Estimate(Estimate {
+                timestamp_us: 1_000_000 + k * 20_000,
+                pose: Pose::new(k as f32, 0.0, 0.0),
+                flags: EstimateFlags::INITIALIZED,
+                ess: 100.0,
+                ..Estimate::default()
+            });
+            let mut w = [0u8; MAX_WIRE_LEN];
+            let len = enc.encode(&m, &mut w).unwrap();
+            // The bridge may have gone (a time limit): that ends the device too.
+            if s.write_all(&w[..len]).is_err() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        std::thread::sleep(hold);
+    });
+    (addr, h)
+}
+
+fn bridge(addr: &str, domain: u16, extra: &[&str]) -> Output {
+    bin()
+        .args(["--json", "bridge", "--connect", addr, "--loopback-only"])
+        .args(["--domain-id", &domain.to_string()])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn report(out: &Output) -> serde_json::Value {
+    serde_json::from_slice(&out.stdout).unwrap_or_else(|e| {
+        panic!(
+            "no JSON report ({e}); stderr: {}",
+            String::from_utf8_lossy(&out.stderr)
+        )
+    })
+}
+
+fn code(out: &Output) -> Option<i32> {
+    out.status.code()
+}
+
+#[test]
+fn seconds_that_are_not_a_positive_number_are_usage_errors() {
+    for bad in ["NaN", "0", "-1", "-inf", "soon"] {
+        // No device is needed: the option is refused before anything starts.
+        // `--seconds=-1`: the value itself reaches the check (not read as another option).
+        let out = bridge("127.0.0.1:9", 70, &[&format!("--seconds={bad}")]);
+        assert_eq!(
+            code(&out),
+            Some(2),
+            "--seconds {bad}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("a positive number of seconds") || err.contains("not a number"),
+            "{err}"
+        );
+    }
+}
+
+#[test]
+fn huge_seconds_are_no_limit_and_a_closed_link_exits_3() {
+    for (domain, seconds) in [(71, "1e30"), (72, "inf")] {
+        let (addr, dev) = device(5, Duration::ZERO);
+        let out = bridge(&addr, domain, &["--seconds", seconds]);
+        dev.join().unwrap();
+        assert_eq!(
+            code(&out),
+            Some(3),
+            "--seconds {seconds}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let r = report(&out);
+        assert_eq!(r["exit_code"], 3);
+        assert_eq!(r["poses"], 5, "{r}");
+    }
+}
+
+#[test]
+fn a_closed_link_exits_3() {
+    let (addr, dev) = device(3, Duration::ZERO);
+    let out = bridge(&addr, 76, &[]);
+    dev.join().unwrap();
+    assert_eq!(
+        code(&out),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = report(&out);
+    assert_eq!(r["poses"], 3, "{r}");
+    assert_eq!(r["ended"], "the device closed the link", "{r}");
+}
+
+#[test]
+fn a_time_limit_exits_0() {
+    let (addr, dev) = device(3, Duration::from_secs(4));
+    let out = bridge(&addr, 73, &["--seconds", "1.5"]);
+    assert_eq!(
+        code(&out),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(report(&out)["poses"], 3);
+    dev.join().unwrap();
+}
+
+#[test]
+fn no_device_exits_1() {
+    // A port nobody listens on.
+    let free = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = free.local_addr().unwrap().to_string();
+    drop(free);
+    let out = bridge(&addr, 74, &[]);
+    assert_eq!(
+        code(&out),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn a_huge_transform_tolerance_saturates() {
+    let dir = std::env::temp_dir().join(format!("beamfield-bridge-tol-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let params = dir.join("params.yaml");
+    std::fs::write(
+        &params,
+        "amcl:\n  ros__parameters:\n    transform_tolerance: 1.0e300\n",
+    )
+    .unwrap();
+    let (addr, dev) = device(4, Duration::ZERO);
+    let out = bridge(&addr, 75, &["--params", params.to_str().unwrap()]);
+    dev.join().unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(
+        code(&out),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = report(&out);
+    assert_eq!(r["transforms"], 4, "{r}");
+}
