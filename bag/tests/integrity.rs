@@ -539,3 +539,31 @@ fn the_reference_library_refuses_and_accepts_the_same_files() {
     assert!(ours.values().filter(|r| r.is_ok()).count() >= 4);
     assert!(ours.values().filter(|r| r.is_err()).count() >= 6);
 }
+
+/// Files written by another writer (PyPI rosbags) pass every check: the shared Intel bag and
+/// the fuzz seed. rosbags writes no CRC (0 in every chunk, the Data End and the Footer), so
+/// only the length and size checks apply to its files.
+#[test]
+fn bags_written_by_rosbags_pass_the_checks() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let intel = root.join("tools/tests/data/intel-bag");
+    let topics = Topics {
+        reference: Some("/ground_truth".into()),
+        ..Topics::default()
+    };
+    let bag = Bag::read(&intel, &topics).unwrap();
+    assert!(bag.scans.len() > 100 && !bag.reference.is_empty());
+    let seed = std::fs::read(root.join("fuzz/seeds/bag_decode/three-scans.mcap")).unwrap();
+    beamfield_bag::guard::check(&seed).unwrap();
+    for bytes in [
+        read_bounded(&intel.join("intel-bag.mcap"), MAX_BAG_FILE_BYTES).unwrap(),
+        seed,
+    ] {
+        let chunk = first(&bytes, 0x06);
+        let at = data_crc_at(&bytes);
+        assert_eq!(
+            (&bytes[chunk_crc_at(chunk)..][..4], &bytes[at..at + 4]),
+            (&[0u8; 4][..], &[0u8; 4][..])
+        );
+    }
+}
