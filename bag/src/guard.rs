@@ -272,13 +272,15 @@ fn fields(op: u8, b: &[u8]) -> Option<()> {
             r.sized()?;
             r.skip(16)
         }
-        // Attachment: two times, name, media type, data.
+        // Attachment: two times, name, media type, data, CRC (the crate slices the data up to
+        // the CRC and panicked on an attachment with no room for it).
         0x09 => {
             r.skip(16)?;
             r.sized()?;
             r.sized()?;
             let n = usize::try_from(r.u64()?).ok()?;
-            r.skip(n)
+            r.skip(n)?;
+            r.skip(4)
         }
         // Attachment index: five u64, name, media type.
         0x0A => {
@@ -570,6 +572,30 @@ mod tests {
         cut.push(0x01);
         cut.extend(1000u64.to_le_bytes());
         assert!(check(&cut).is_err());
+    }
+
+    #[test]
+    fn an_attachment_without_room_for_its_crc_is_refused() {
+        let mut body = Vec::new();
+        body.extend([0u8; 16]);
+        body.extend(0u32.to_le_bytes());
+        body.extend(0u32.to_le_bytes());
+        body.extend(3u64.to_le_bytes());
+        body.extend(b"abc");
+        let mut file = MAGIC.to_vec();
+        file.extend(rec(0x09, &body));
+        assert_eq!(
+            check(&file),
+            Err(Corrupt::Length(BadLength {
+                at: 8,
+                what: "an attachment's field",
+                chunk: None,
+            }))
+        );
+        body.extend(0u32.to_le_bytes());
+        let mut file = MAGIC.to_vec();
+        file.extend(rec(0x09, &body));
+        assert_eq!(check(&file), Ok(()));
     }
 
     #[test]

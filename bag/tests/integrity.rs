@@ -567,3 +567,23 @@ fn bags_written_by_rosbags_pass_the_checks() {
         );
     }
 }
+
+/// Inputs the fuzzer (`fuzz/fuzz_targets/bag_decode.rs`) found, kept as its seeds: each is
+/// refused without a panic.
+#[test]
+fn fuzz_findings_are_refused() {
+    let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/seeds/bag_decode");
+    // An attachment with no room for its CRC: the `mcap` crate panicked slicing it.
+    let bytes = std::fs::read(seeds.join("panic-attachment-without-crc.mcap")).unwrap();
+    let e = corrupt(&bytes);
+    assert!(
+        matches!(
+            e,
+            Corrupt::Length(BadLength {
+                what: "an attachment's field",
+                ..
+            })
+        ),
+        "{e:?}"
+    );
+}
