@@ -52,8 +52,8 @@ pub struct Nav2Params {
     pub ignored: BTreeMap<String, String>,
 }
 
-/// Largest params file read, bytes: 1 MiB (nav2's whole default params file is about 20 KB),
-/// as the host tool's limit for small text files (`tools/src/input/limits.rs`).
+/// Largest params file read, bytes: 1 MiB, as the host tool's limit for small text files
+/// (`MAX_TEXT_FILE_BYTES`, `tools/src/input/limits.rs`).
 pub const MAX_PARAMS_FILE_BYTES: u64 = 1 << 20;
 
 /// A params file that could not be used.
