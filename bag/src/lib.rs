@@ -6,6 +6,10 @@
 //! A message that cannot be used is skipped and counted by cause (malformed, stamped before
 //! the previous one on its topic, a scan with no ranges …); a missing topic or one of another
 //! type is an error that names what the bag does have.
+//!
+//! Nothing in a file is trusted before it is checked: a bag file must be a regular file of at
+//! most [`MAX_BAG_FILE_BYTES`] ([`read_bounded`]), and every record, chunk and CRC of it is
+//! checked by [`guard::check`] before the `mcap` crate parses it.
 
 pub mod cdr;
 pub mod guard;
@@ -85,10 +89,25 @@ pub struct Bag {
     pub topics: BTreeMap<String, (String, u64)>,
 }
 
+/// Largest MCAP file read, bytes: 2 GiB. rosbag2 splits a recording into files of a size the
+/// user chooses; a file is read whole into memory.
+pub const MAX_BAG_FILE_BYTES: u64 = 2 << 30;
+
 /// A bag that could not be read.
 #[derive(Debug)]
 pub enum BagError {
     Io(PathBuf, std::io::Error),
+    /// The path names a device, a FIFO or something else that is not a regular file.
+    NotAFile(PathBuf),
+    /// The file is larger than `limit` bytes: `bytes` is its size, or `limit + 1` for a file
+    /// that grew past the limit while it was read.
+    TooLarge {
+        path: PathBuf,
+        bytes: u64,
+        limit: u64,
+    },
+    /// The file's records, chunks or CRCs are damaged ([`guard::check`]).
+    Corrupt(PathBuf, guard::Corrupt),
     /// A directory with no `.mcap` file.
     NoMcap(PathBuf),
     Mcap(PathBuf, String),
@@ -114,6 +133,13 @@ impl std::fmt::Display for BagError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Io(p, e) => write!(f, "cannot read {}: {e}", p.display()),
+            Self::NotAFile(p) => write!(f, "{} is not a regular file", p.display()),
+            Self::TooLarge { path, bytes, limit } => write!(
+                f,
+                "{} is larger than {limit} bytes, the limit for an MCAP file ({bytes} bytes seen)",
+                path.display()
+            ),
+            Self::Corrupt(p, e) => write!(f, "{} is damaged: {e}", p.display()),
             Self::NoMcap(p) => write!(f, "{} holds no .mcap file", p.display()),
             Self::Mcap(p, e) => write!(f, "{} is not a readable MCAP file: {e}", p.display()),
             Self::MissingTopic { topic, available } => write!(
@@ -136,6 +162,40 @@ impl std::fmt::Display for BagError {
 }
 
 impl std::error::Error for BagError {}
+
+/// Reads a whole regular file of at most `limit` bytes. A device, FIFO or directory is refused
+/// before it is opened ([`BagError::NotAFile`]); a file whose size is over the limit is refused
+/// before it is read, and one that grows past the limit while being read is refused after
+/// `limit + 1` bytes ([`BagError::TooLarge`]).
+///
+/// # Errors
+/// [`BagError::Io`], [`BagError::NotAFile`], [`BagError::TooLarge`].
+pub fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>, BagError> {
+    use std::io::Read;
+    let io = |e| BagError::Io(path.to_path_buf(), e);
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(BagError::NotAFile(path.to_path_buf()));
+    }
+    let too_large = |bytes| BagError::TooLarge {
+        path: path.to_path_buf(),
+        bytes,
+        limit,
+    };
+    if meta.len() > limit {
+        return Err(too_large(meta.len()));
+    }
+    let mut out = Vec::new();
+    std::fs::File::open(path)
+        .map_err(io)?
+        .take(limit.saturating_add(1))
+        .read_to_end(&mut out)
+        .map_err(io)?;
+    if out.len() as u64 > limit {
+        return Err(too_large(out.len() as u64));
+    }
+    Ok(out)
+}
 
 /// The `.mcap` files of a bag: the file itself, or those of a rosbag2 directory, sorted.
 fn mcap_files(path: &Path) -> Result<Vec<PathBuf>, BagError> {
@@ -310,7 +370,7 @@ impl Bag {
         let roles = roles(topics);
         let mut last: BTreeMap<&str, u64> = BTreeMap::new();
         for file in mcap_files(path)? {
-            let bytes = std::fs::read(&file).map_err(|e| BagError::Io(file.clone(), e))?;
+            let bytes = read_bounded(&file, MAX_BAG_FILE_BYTES)?;
             bag.add_mcap(&file, &bytes, &roles, &mut last)?;
         }
         bag.check_topics(&roles)?;
@@ -337,7 +397,7 @@ impl Bag {
         last: &mut BTreeMap<&'t str, u64>,
     ) -> Result<(), BagError> {
         let bag = self;
-        guard::check(bytes).map_err(|e| BagError::Mcap(file.into(), e.to_string()))?;
+        guard::check(bytes).map_err(|e| BagError::Corrupt(file.into(), e))?;
         {
             let stream = mcap::MessageStream::new(bytes)
                 .map_err(|e| BagError::Mcap(file.into(), e.to_string()))?;

@@ -52,10 +52,23 @@ pub struct Nav2Params {
     pub ignored: BTreeMap<String, String>,
 }
 
+/// Largest params file read, bytes: 1 MiB, as the host tool's limit for small text files
+/// (`MAX_TEXT_FILE_BYTES`, `tools/src/input/limits.rs`).
+pub const MAX_PARAMS_FILE_BYTES: u64 = 1 << 20;
+
 /// A params file that could not be used.
 #[derive(Debug)]
 pub enum ParamsError {
     Read(std::path::PathBuf, std::io::Error),
+    /// The path names a device, a FIFO or something else that is not a regular file.
+    NotAFile(std::path::PathBuf),
+    /// The file is larger than `limit` bytes: `bytes` is its size, or `limit + 1` for a file
+    /// that grew past the limit while it was read.
+    TooLarge {
+        path: std::path::PathBuf,
+        bytes: u64,
+        limit: u64,
+    },
     Yaml(serde_yaml::Error),
     /// No `amcl: ros__parameters:` mapping.
     NoAmclSection,
@@ -70,6 +83,12 @@ impl std::fmt::Display for ParamsError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Read(p, e) => write!(f, "cannot read {}: {e}", p.display()),
+            Self::NotAFile(p) => write!(f, "{} is not a regular file", p.display()),
+            Self::TooLarge { path, bytes, limit } => write!(
+                f,
+                "{} is larger than {limit} bytes, the limit for a params file ({bytes} bytes seen)",
+                path.display()
+            ),
             Self::Yaml(e) => write!(f, "not a YAML params file: {e}"),
             Self::NoAmclSection => f.write_str(
                 "no `amcl: ros__parameters:` section (the bridge reads nav2_amcl's parameters)",
@@ -130,9 +149,35 @@ fn text(name: &str, v: &Value) -> Result<String, ParamsError> {
 }
 
 impl Nav2Params {
-    /// Reads a nav2 params file.
+    /// Reads a nav2 params file: a regular file of at most [`MAX_PARAMS_FILE_BYTES`] (a
+    /// device or FIFO is refused before it is opened, a larger file before it is read or, if it
+    /// grows while read, after `MAX_PARAMS_FILE_BYTES + 1` bytes).
     pub fn read(path: &std::path::Path) -> Result<Self, ParamsError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ParamsError::Read(path.into(), e))?;
+        use std::io::Read;
+        let io = |e| ParamsError::Read(path.into(), e);
+        let meta = std::fs::metadata(path).map_err(io)?;
+        if !meta.is_file() {
+            return Err(ParamsError::NotAFile(path.into()));
+        }
+        let too_large = |bytes| ParamsError::TooLarge {
+            path: path.into(),
+            bytes,
+            limit: MAX_PARAMS_FILE_BYTES,
+        };
+        if meta.len() > MAX_PARAMS_FILE_BYTES {
+            return Err(too_large(meta.len()));
+        }
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .map_err(io)?
+            .take(MAX_PARAMS_FILE_BYTES + 1)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() as u64 > MAX_PARAMS_FILE_BYTES {
+            return Err(too_large(bytes.len() as u64));
+        }
+        let text = String::from_utf8(bytes)
+            .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))?;
         Self::parse(&text)
     }
 
@@ -335,6 +380,34 @@ bt_navigator:
         );
         let low = Nav2Params::parse("amcl:\n  ros__parameters:\n    alpha1: 0.01\n").unwrap();
         assert_eq!(low.applied["alpha1"], "SetParameters α1 0.01");
+    }
+
+    #[test]
+    fn only_a_regular_file_of_at_most_1_mib_is_read() {
+        // A device would be read for ever; it is refused before it is opened.
+        assert!(matches!(
+            Nav2Params::read(std::path::Path::new("/dev/zero")),
+            Err(ParamsError::NotAFile(_))
+        ));
+        let dir = std::env::temp_dir().join(format!("bf-params-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let big = dir.join("big.yaml");
+        let f = std::fs::File::create(&big).unwrap();
+        f.set_len(MAX_PARAMS_FILE_BYTES + 1).unwrap();
+        drop(f);
+        let e = Nav2Params::read(&big).unwrap_err();
+        assert!(
+            matches!(e, ParamsError::TooLarge { bytes, limit, .. }
+                if bytes == MAX_PARAMS_FILE_BYTES + 1 && limit == MAX_PARAMS_FILE_BYTES),
+            "{e:?}"
+        );
+        let small = dir.join("nav2.yaml");
+        std::fs::write(&small, NAV2).unwrap();
+        assert_eq!(
+            Nav2Params::read(&small).unwrap(),
+            Nav2Params::parse(NAV2).unwrap()
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
