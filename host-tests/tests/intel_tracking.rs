@@ -35,6 +35,7 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         resetting: false,
         adaptive_noise: None,
         kld: None,
+        update_min: (0.0, 0.0),
         reset_per_update: 0,
         clutter_share: 0.0,
     }

@@ -167,3 +167,56 @@ fn reference_file_errors_name_the_line() {
     assert!(run("500 1 2 3\n").contains("no reference pose within the 100 scans run"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--update-min D,A` (AMCL's update gate): with a gate no step of the slice reaches, the filter
+/// weighs the first scan only and every later estimate is that one carried by the odometry, so
+/// the particles' weights (their ESS) never change and the pose follows the odometry; without
+/// it, every scan is weighed. Malformed gates are usage errors.
+#[test]
+fn the_update_gate_carries_the_estimate_between_updates() {
+    const SCANS: usize = 120;
+    let mut gated = args(&SCANS.to_string());
+    gated.extend(["--update-min", "1000,1000"].map(String::from));
+    let v = run_json(bin().args(&gated));
+    assert_eq!(v["update_min"][0], 1000.0);
+    let every = run_json(bin().args(args(&SCANS.to_string())));
+    let first = anchors()[0].0;
+    for (run, all) in v["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(every["runs"].as_array().unwrap())
+    {
+        let per = run["per_scan"].as_array().unwrap();
+        assert_eq!(per.len(), SCANS - first);
+        // One weighing (the first scan), so at most one resampling; every scan without the gate.
+        assert!(
+            run["resamplings"].as_u64().unwrap() <= 1,
+            "{}",
+            run["resamplings"]
+        );
+        assert!(
+            all["resamplings"].as_u64().unwrap() > 10,
+            "{}",
+            all["resamplings"]
+        );
+        let ess0 = per[0]["ess"].as_f64().unwrap();
+        let (mut moved, mut prev) = (0.0f64, per[0]["pose"].clone());
+        for rec in &per[1..] {
+            assert_eq!(rec["ess"].as_f64().unwrap(), ess0, "scan {}", rec["scan"]);
+            let d = |i: usize| rec["pose"][i].as_f64().unwrap() - prev[i].as_f64().unwrap();
+            moved += d(0).hypot(d(1));
+            prev = rec["pose"].clone();
+        }
+        // The robot drives through the slice: the carried estimate moves with it.
+        assert!(moved > 1.0, "carried {moved} m");
+    }
+    for bad in ["nan,0", "-1,0", "0.25", "0.25,inf"] {
+        let mut a = args("50");
+        a.extend(["--update-min".to_string(), bad.to_string()]);
+        let out = bin().args(&a).output().unwrap();
+        assert!(!out.status.success(), "--update-min {bad}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--update-min"), "{bad}: {err}");
+    }
+}

@@ -62,6 +62,10 @@ pub struct RunOptions {
     /// KLD sampling between these particle counts (nav2's `pf_err` 0.05, `pf_z` 0.99, bins
     /// 0.5 m and 10°; `MclConfig::with_kld`), starting from `particles`; None: a fixed count.
     pub kld: Option<(u16, u16)>,
+    /// Update the filter only once the odometry has moved this far since the last update
+    /// (metres, radians: AMCL's `update_min_d`, `update_min_a`); in between, the estimate is
+    /// the last one moved by the odometry. `(0, 0)` updates at every scan.
+    pub update_min: (f32, f32),
 }
 
 /// One update of a run, as `--json` reports it: where the filter put the robot, how sure it
@@ -428,12 +432,25 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
     }
     let mut settled = Settled::default();
     let mut seen = OdometryStep::STILL;
+    // The odometry of the last update: the filter's steps run from there.
+    let mut last = start;
     for k in start..n {
         let truth = input.truth(k);
+        let mut carried = None;
         if k > start {
-            seen = OdometryStep::between(&odom[k - 1], &odom[k])
+            seen = OdometryStep::between(&odom[last], &odom[k])
                 .map_err(|e| usage(format!("odometry {k}: {e}")))?;
-            mcl.predict(&seen, &mut rng);
+            let moved = seen.trans_m() >= o.update_min.0
+                || wrap_angle(seen.rot1_rad() + seen.rot2_rad()).abs() >= o.update_min.1;
+            // The scan of a kidnapping is always weighed.
+            if !moved && o.kidnap != Some(k) {
+                // No update: the last estimate carried by the odometry since, as AMCL's
+                // map → odom transform carries it.
+                carried = Some(seen.apply(&mcl.estimate().pose));
+            } else {
+                last = k;
+                mcl.predict(&seen, &mut rng);
+            }
         }
         // While settled, no free space: no random particles (the averages still follow).
         let free_now = if o.recovery_while_unsettled && settled.done() {
@@ -449,6 +466,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         let scan = &Scan::<MAX_BEAMS>::from_ranges(&input.scans[k])
             .map_err(|e| usage(format!("scan {k}: {e}")))?;
         let result = match o.weighting {
+            _ if carried.is_some() => Err(MclError::EmptyScan),
             Weighting::Product => {
                 let prepared = model.prepare(&input.layout, scan);
                 mcl.update_prepared(&prepared, free_now, &mut rng)
@@ -474,6 +492,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
                 settled.observe(&u.estimate, &seen);
                 (Some(u), false)
             }
+            Err(MclError::EmptyScan) if carried.is_some() => (None, false),
             Err(MclError::EmptyScan | MclError::AllImpossible) => {
                 out.skipped += 1;
                 (None, true)
@@ -484,7 +503,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         out.particles_in_use.push(mcl.len());
         let estimate = update.map_or_else(|| *mcl.estimate(), |u| u.estimate);
         let quality = update.map_or_else(|| *mcl.quality(), |u| u.quality);
-        let est = estimate.pose;
+        let est = carried.unwrap_or(estimate.pose);
         let errors = truth.map(|truth| {
             let dx = f64::from(est.x_m - truth.x_m);
             let dy = f64::from(est.y_m - truth.y_m);

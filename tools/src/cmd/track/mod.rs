@@ -168,6 +168,17 @@ pub struct TrackArgs {
     /// MIN and MAX, starting from --particles.
     #[arg(long, value_name = "MIN,MAX")]
     pub kld: Option<String>,
+    /// Update the filter only once the odometry has moved D metres or turned A radians since
+    /// the last update, "D,A" (AMCL's update_min_d and update_min_a; nav2's defaults are
+    /// "0.25,0.2"); between updates the estimate is the last one carried by the odometry. The
+    /// default "0,0" updates at every scan.
+    #[arg(
+        long,
+        default_value = "0,0",
+        value_name = "D,A",
+        allow_hyphen_values = true
+    )]
+    pub update_min: String,
     /// Resample when the effective sample size falls below this fraction of the particles.
     #[arg(long = "resample-ess", default_value_t = 0.5)]
     pub resample_ess: f32,
@@ -252,7 +263,15 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         }
         None => None,
     };
+    let m = parse_list(&args.update_min, "--update-min", 2)?;
+    if !m.iter().all(|x| x.is_finite() && *x >= 0.0) {
+        return Err(usage(format!(
+            "--update-min {:?}: a distance (m) and an angle (rad), each finite and at least 0",
+            args.update_min
+        )));
+    }
     Ok(RunOptions {
+        update_min: (m[0], m[1]),
         reset_per_update: args.reset_per_update,
         clutter_share: args.clutter_share,
         adaptive_noise,
@@ -471,6 +490,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         kidnap: o.kidnap,
         adaptive_noise: o.adaptive_noise,
         kld: o.kld.map(|(a, b)| [a, b]),
+        update_min: [o.update_min.0, o.update_min.1],
         runs: per,
         trans_rmse_cm_min_med_max: rmse,
         heading_rmse_deg_min_med_max: head,

@@ -62,6 +62,8 @@ pub struct TrackReport {
     pub adaptive_noise: Option<[f32; 4]>,
     /// KLD sampling's fewest and most particles, when on.
     pub kld: Option<[u16; 2]>,
+    /// The update gate (`--update-min`): metres, radians; 0, 0 updates at every scan.
+    pub update_min: [f32; 2],
     /// Every seed's run.
     pub runs: Vec<SeedRun>,
     /// Translation RMSE over the seeds, cm: min, median, max.
@@ -146,6 +148,13 @@ impl fmt::Display for TrackReport {
             writeln!(
                 f,
                 "adaptive motion noise: on (target {t}, rate {r}, variance scale {lo} ..= {hi})"
+            )?;
+        }
+        if o.update_min != (0.0, 0.0) {
+            writeln!(
+                f,
+                "update gate: the filter updates once the odometry has moved {} m or turned {} rad",
+                o.update_min.0, o.update_min.1
             )?;
         }
         if o.resetting {
