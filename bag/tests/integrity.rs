@@ -11,6 +11,9 @@
 //! a reader that allocates from an unchecked length or reads without bound fails them by
 //! aborting or by being killed instead of taking the machine with it.
 
+mod common;
+
+use common::Out;
 use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
@@ -22,41 +25,6 @@ use beamfield_bag::{read_bounded, Bag, BagError, Topics, MAX_BAG_FILE_BYTES};
 const SCAN: &str = "sensor_msgs/msg/LaserScan";
 const ODOM: &str = "nav_msgs/msg/Odometry";
 const MAGIC: &[u8; 8] = b"\x89MCAP0\r\n";
-
-/// A little-endian CDR message: the encapsulation header, then fields aligned to their size.
-struct Out(Vec<u8>);
-
-impl Out {
-    fn new() -> Self {
-        Out(vec![0, 1, 0, 0])
-    }
-    fn align(&mut self, n: usize) {
-        while (self.0.len() - 4) % n != 0 {
-            self.0.push(0);
-        }
-    }
-    fn u32(&mut self, v: u32) -> &mut Self {
-        self.align(4);
-        self.0.extend(v.to_le_bytes());
-        self
-    }
-    fn f32(&mut self, v: f32) -> &mut Self {
-        self.align(4);
-        self.0.extend(v.to_le_bytes());
-        self
-    }
-    fn f64(&mut self, v: f64) -> &mut Self {
-        self.align(8);
-        self.0.extend(v.to_le_bytes());
-        self
-    }
-    fn string(&mut self, s: &str) -> &mut Self {
-        self.u32(s.len() as u32 + 1);
-        self.0.extend(s.as_bytes());
-        self.0.push(0);
-        self
-    }
-}
 
 fn scan(t_s: u32) -> Vec<u8> {
     let mut o = Out::new();

@@ -3,48 +3,12 @@
 //! The bag is written here with the `mcap` crate's writer and CDR laid out by hand from the
 //! message definitions.
 
+mod common;
+
 use beamfield_bag::{Bag, Topics};
+use common::Out;
 use std::collections::BTreeMap;
 use std::io::Cursor;
-
-/// A little-endian CDR message being laid out: fields aligned to their size after the 4-byte
-/// encapsulation header.
-struct Out(Vec<u8>);
-
-impl Out {
-    fn new() -> Self {
-        Out(vec![0, 1, 0, 0])
-    }
-    fn align(&mut self, n: usize) {
-        while (self.0.len() - 4) % n != 0 {
-            self.0.push(0);
-        }
-    }
-    fn u32(&mut self, v: u32) -> &mut Self {
-        self.align(4);
-        self.0.extend(v.to_le_bytes());
-        self
-    }
-    fn f32(&mut self, v: f32) -> &mut Self {
-        self.align(4);
-        self.0.extend(v.to_le_bytes());
-        self
-    }
-    fn f64(&mut self, v: f64) -> &mut Self {
-        self.align(8);
-        self.0.extend(v.to_le_bytes());
-        self
-    }
-    fn string(&mut self, s: &str) -> &mut Self {
-        self.u32(s.len() as u32 + 1);
-        self.0.extend(s.as_bytes());
-        self.0.push(0);
-        self
-    }
-    fn header(&mut self, t_s: u32, frame: &str) -> &mut Self {
-        self.u32(t_s).u32(0).string(frame)
-    }
-}
 
 fn scan(t_s: u32, beams: u32) -> Vec<u8> {
     let mut o = Out::new();
