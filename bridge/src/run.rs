@@ -415,13 +415,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
             break;
         }
         // Messages held back (a full window, the interval) go out before newer ones are taken.
-        let now = Instant::now();
-        poses
-            .flush(now, |m| node.publish_pose(m))
-            .unwrap_or_else(ros_failed);
-        transforms
-            .flush(now, |m| node.publish_tf(m))
-            .unwrap_or_else(ros_failed);
+        flush_both(&mut poses, &mut transforms, &node, Instant::now());
         let wait = if poses.is_pending() || transforms.is_pending() {
             Duration::from_millis(1)
         } else {
@@ -571,13 +565,12 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
         }
     }
     // A last try for what was held back.
-    let now = Instant::now() + outbox::MIN_INTERVAL;
-    poses
-        .flush(now, |m| node.publish_pose(m))
-        .unwrap_or_else(ros_failed);
-    transforms
-        .flush(now, |m| node.publish_tf(m))
-        .unwrap_or_else(ros_failed);
+    flush_both(
+        &mut poses,
+        &mut transforms,
+        &node,
+        Instant::now() + outbox::MIN_INTERVAL,
+    );
     r.poses = poses.counters.published;
     r.transforms = transforms.counters.published;
     r.amcl_pose_outbox = poses.counters;
@@ -589,6 +582,23 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     r.frames_sent = port.sent;
     r.seconds = started.elapsed().as_secs_f64();
     Ok(r)
+}
+
+/// Sends what both outboxes hold back and may go out at `now` (poses first); a publish error is
+/// reported on stderr and the bridge goes on.
+fn flush_both(
+    poses: &mut Outbox<crate::msg::PoseWithCovarianceStamped>,
+    transforms: &mut Outbox<TfMessage>,
+    node: &RosNode,
+    now: Instant,
+) {
+    let ros_failed = |e: RosError| eprintln!("bridge: {e}");
+    poses
+        .flush(now, |m| node.publish_pose(m))
+        .unwrap_or_else(ros_failed);
+    transforms
+        .flush(now, |m| node.publish_tf(m))
+        .unwrap_or_else(ros_failed);
 }
 
 #[cfg(test)]
