@@ -35,6 +35,8 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         resetting: false,
         adaptive_noise: None,
         kld: None,
+        adaptive_sigma: None,
+        kappa_uncertain: None,
         update_min: (0.0, 0.0),
         reset_per_update: 0,
         clutter_share: 0.0,

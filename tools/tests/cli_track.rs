@@ -108,6 +108,42 @@ fn global_init_needs_the_free_space_section() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--unexplained"), "{err}");
+    // The defaults the docs name: κ 64, odometry noise α 0.02.
+    assert_eq!(v["kappa"], 64.0);
+    assert!(v["odom_alphas"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|a| (a.as_f64().unwrap() - 0.02).abs() < 1e-7));
+    // The study options run, are echoed in the report, and bad values are refused by name.
+    let out = run(&[
+        "--json",
+        "--kappa-uncertain",
+        "8.25",
+        "--adaptive-sigma",
+        "1,0.3",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let study: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(study["kappa_uncertain"], 8.25);
+    assert_eq!(study["adaptive_sigma"][0], 1.0);
+    assert!((study["adaptive_sigma"][1].as_f64().unwrap() - 0.3).abs() < 1e-7);
+    for (flag, value) in [
+        ("--kappa-uncertain", "0"),
+        ("--kappa-uncertain", "nan"),
+        ("--adaptive-sigma", "-1,0.3"),
+        ("--adaptive-sigma", "1,0"),
+        ("--adaptive-sigma", "1"),
+    ] {
+        let out = run(&[flag, value]);
+        assert!(!out.status.success(), "{flag} {value} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(flag), "{flag} {value}: {err}");
+    }
     // With the section appended, global initialization runs.
     let grid = FreeSpaceGrid::of_view(&beamfield::field::FieldView::parse(&blob).unwrap());
     let flags: Vec<bool> = (0..1600u32)

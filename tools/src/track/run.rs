@@ -62,6 +62,12 @@ pub struct RunOptions {
     /// KLD sampling between these particle counts (nav2's `pf_err` 0.05, `pf_z` 0.99, bins
     /// 0.5 m and 10°; `MclConfig::with_kld`), starting from `particles`; None: a fixed count.
     pub kld: Option<(u16, u16)>,
+    /// The likelihood's σ_hit following the predicted cloud's spread, (gain, largest σ in
+    /// metres): σ² = σ_hit² + gain · (var x + var y) / 2 of the particles before each update;
+    /// None: the fixed σ_hit.
+    pub adaptive_sigma: Option<(f32, f32)>,
+    /// κ while the quality signal does not report `Tracking` (None: `kappa` always).
+    pub kappa_uncertain: Option<f32>,
     /// Update the filter only once the odometry has moved this far since the last update
     /// (metres, radians: AMCL's `update_min_d`, `update_min_a`); in between, the estimate is
     /// the last one moved by the odometry. `(0, 0)` updates at every scan.
@@ -370,7 +376,7 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         }))
         .map_err(|e| usage(format!("--kld: {e}")))?;
     let lf = LikelihoodField::new(view, input.params);
-    let model = Tempered::new(lf, o.kappa, o.stride)
+    let mut model = Tempered::new(lf, o.kappa, o.stride)
         .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;
     let mut store: Box<Particles<MAX_TRACK_PARTICLES>> = Box::default();
     let mut mcl = Mcl::new(&mut store, config).map_err(TrackError::Filter)?;
@@ -465,6 +471,29 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
         }
         let scan = &Scan::<MAX_BEAMS>::from_ranges(&input.scans[k])
             .map_err(|e| usage(format!("scan {k}: {e}")))?;
+        if let Some(k_unc) = o.kappa_uncertain {
+            let kappa = if mcl.quality().state == Quality::Tracking {
+                o.kappa
+            } else {
+                k_unc
+            };
+            if kappa != model.kappa() {
+                model = Tempered::new(LikelihoodField::new(view, input.params), kappa, o.stride)
+                    .map_err(|e| usage(format!("--kappa-uncertain: {e}")))?;
+            }
+        }
+        if let Some((gain, max_sigma)) = o.adaptive_sigma {
+            let base = input.params;
+            let spread = cloud_xy_variance(mcl.poses(), mcl.weights());
+            let sigma = (base.sigma_hit_m().powi(2) + gain * spread)
+                .sqrt()
+                .clamp(base.sigma_hit_m(), max_sigma.max(base.sigma_hit_m()));
+            let params =
+                LikelihoodParams::new(base.z_hit(), base.z_rand(), sigma, base.max_range_m())
+                    .map_err(|e| usage(format!("--adaptive-sigma: {e}")))?;
+            model = Tempered::new(LikelihoodField::new(view, params), o.kappa, o.stride)
+                .map_err(|e| usage(format!("--kappa / --stride: {e}")))?;
+        }
         let result = match o.weighting {
             _ if carried.is_some() => Err(MclError::EmptyScan),
             Weighting::Product => {
@@ -641,4 +670,25 @@ fn kidnap<const N: usize>(
             (f64::from(p.theta_rad) + turn) as f32,
         )
     });
+}
+
+/// The weighted mean of the x and y variances of a particle set (m²); 0 for an empty set.
+fn cloud_xy_variance(poses: &[Pose], weights: &[f32]) -> f32 {
+    let (mut sw, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0f64);
+    for (p, &w) in poses.iter().zip(weights) {
+        let w = f64::from(w);
+        sw += w;
+        sx += w * f64::from(p.x_m);
+        sy += w * f64::from(p.y_m);
+    }
+    if sw <= 0.0 {
+        return 0.0;
+    }
+    let (mx, my) = (sx / sw, sy / sw);
+    let mut v = 0.0f64;
+    for (p, &w) in poses.iter().zip(weights) {
+        let (dx, dy) = (f64::from(p.x_m) - mx, f64::from(p.y_m) - my);
+        v += f64::from(w) * (dx * dx + dy * dy);
+    }
+    (v / sw / 2.0) as f32
 }

@@ -83,8 +83,10 @@ pub struct TrackArgs {
     #[arg(long, default_value_t = 500,
           value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=MAX_TRACK_PARTICLES as u64))]
     pub particles: usize,
-    /// Tempering κ (8.25 is the value `beamfield calibrate` finds on the Intel log).
-    #[arg(long, default_value_t = 8.25)]
+    /// Tempering κ of the summed log-likelihood (dimensionless, > 0). 64 is chosen for a filter
+    /// that applies every scan (docs/localization.md, "Tempering over time"); 8.25 is what
+    /// `beamfield calibrate` finds for one scan on the Intel log, and what the crate used before.
+    #[arg(long, default_value_t = 64.0)]
     pub kappa: f32,
     /// Score every S-th beam (1 to 1081, the most beams a scan has here).
     #[arg(long, default_value_t = 1,
@@ -94,7 +96,7 @@ pub struct TrackArgs {
     /// Odometry noise odom_alpha1..4 (variance coefficients, AMCL's convention), used both to
     /// synthesize the odometry and in the filter (only in the filter with --odometry, --bag or
     /// --wheel-odometry): "A" or "A1,A2,A3,A4".
-    #[arg(long = "odom-noise", default_value = "0.005")]
+    #[arg(long = "odom-noise", default_value = "0.02")]
     pub odom_noise: String,
     /// Seed of the run (see the module docs for the generators).
     #[arg(long, default_value_t = 1)]
@@ -168,6 +170,14 @@ pub struct TrackArgs {
     /// MIN and MAX, starting from --particles.
     #[arg(long, value_name = "MIN,MAX")]
     pub kld: Option<String>,
+    /// The likelihood's σ_hit follows the cloud's spread, "GAIN,MAX": before each update
+    /// σ² = σ_hit² + GAIN · (var x + var y) / 2 of the predicted particles, at most MAX metres
+    /// (off by default).
+    #[arg(long, value_name = "GAIN,MAX")]
+    pub adaptive_sigma: Option<String>,
+    /// Tempering κ while the quality signal does not report Tracking (default: --kappa always).
+    #[arg(long, value_name = "K")]
+    pub kappa_uncertain: Option<f32>,
     /// Update the filter only once the odometry has moved D metres or turned A radians since
     /// the last update, "D,A" (AMCL's update_min_d and update_min_a; nav2's defaults are
     /// "0.25,0.2"); between updates the estimate is the last one carried by the odometry. The
@@ -263,6 +273,18 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         }
         None => None,
     };
+    let adaptive_sigma = match &args.adaptive_sigma {
+        Some(text) => {
+            let v = parse_list(text, "--adaptive-sigma", 2)?;
+            if !(v[0].is_finite() && v[0] >= 0.0 && v[1].is_finite() && v[1] > 0.0) {
+                return Err(usage(format!(
+                    "--adaptive-sigma {text:?}: a gain ≥ 0 and a largest σ > 0 (m)"
+                )));
+            }
+            Some((v[0], v[1]))
+        }
+        None => None,
+    };
     let m = parse_list(&args.update_min, "--update-min", 2)?;
     if !m.iter().all(|x| x.is_finite() && *x >= 0.0) {
         return Err(usage(format!(
@@ -276,6 +298,15 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         clutter_share: args.clutter_share,
         adaptive_noise,
         kld,
+        adaptive_sigma,
+        kappa_uncertain: match args.kappa_uncertain {
+            Some(k) if !(k.is_finite() && k > 0.0) => {
+                return Err(usage(format!(
+                    "--kappa-uncertain {k}: a tempering κ, finite and > 0"
+                )))
+            }
+            k => k,
+        },
         particles: args.particles,
         kappa: args.kappa,
         stride: args.stride,
@@ -490,6 +521,8 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
         kidnap: o.kidnap,
         adaptive_noise: o.adaptive_noise,
         kld: o.kld.map(|(a, b)| [a, b]),
+        adaptive_sigma: o.adaptive_sigma.map(|(g, m)| [g, m]),
+        kappa_uncertain: o.kappa_uncertain,
         update_min: [o.update_min.0, o.update_min.1],
         runs: per,
         trans_rmse_cm_min_med_max: rmse,

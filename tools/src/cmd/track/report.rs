@@ -62,6 +62,10 @@ pub struct TrackReport {
     pub adaptive_noise: Option<[f32; 4]>,
     /// KLD sampling's fewest and most particles, when on.
     pub kld: Option<[u16; 2]>,
+    /// The σ_hit that follows the cloud's spread (gain, largest σ in metres), if on.
+    pub adaptive_sigma: Option<[f32; 2]>,
+    /// κ while the quality signal does not report Tracking (`--kappa-uncertain`), if given.
+    pub kappa_uncertain: Option<f32>,
     /// The update gate (`--update-min`): metres, radians; 0, 0 updates at every scan.
     pub update_min: [f32; 2],
     /// Every seed's run.
@@ -138,6 +142,15 @@ impl fmt::Display for TrackReport {
                 .map(|k| format!(", kidnapped at scan {k}"))
                 .unwrap_or_default()
         )?;
+        if let Some(k) = o.kappa_uncertain {
+            writeln!(f, "κ {k} while the quality signal does not report Tracking")?;
+        }
+        if let Some((gain, max)) = o.adaptive_sigma {
+            writeln!(
+                f,
+                "σ_hit follows the cloud: σ² = σ_hit² + {gain} × (var x + var y) / 2, at most {max} m"
+            )?;
+        }
         if let Some((lo, hi)) = o.kld {
             writeln!(
                 f,
