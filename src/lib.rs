@@ -113,7 +113,7 @@
 //!     let mut decoder = Ld06Decoder::new();
 //!
 //!     let mut store = Particles::<PARTICLES>::new(); // or a `static`, placed where the RAM is
-//!     let config = MclConfig::new(OdometryNoise::uniform(0.005)?, 0.5, 0.0, 0.0)?; // MotionError, MclError
+//!     let config = MclConfig::new(OdometryNoise::uniform(0.02)?, 0.5, 0.0, 0.0)?; // MotionError, MclError
 //!     let mut mcl = Mcl::new(&mut store, config)?; // MclError
 //!     let mut rng = SplitMix64::new(1);
 //!     mcl.init_gaussian(PARTICLES, &start, 0.05, 0.035, &mut rng)?;

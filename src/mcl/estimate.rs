@@ -131,11 +131,13 @@ pub struct ReportedCovariance {
 }
 
 impl ReportedCovariance {
-    /// The defaults: `floor_m` 0.06 m (chosen on the tuning buildings, docs/localization.md
-    /// "Honest covariance") and `floor_rad` 0.02 rad, growth 1.2 per `Uncertain` update and 1.5
-    /// per `Lost` one, at most (100 m)² and π² rad².
+    /// The defaults: `floor_m` 0.025 m (chosen on the tuning buildings with the filter at the
+    /// crate's defaults, κ 64 and α 0.02: docs/localization.md "Honest covariance"; a sharper
+    /// likelihood gives a tighter particle set and needs a larger floor) and `floor_rad`
+    /// 0.02 rad, growth 1.2 per `Uncertain` update and 1.5 per `Lost` one, at most (100 m)² and
+    /// π² rad².
     pub const DEFAULT: Self = Self {
-        floor_m: 0.06,
+        floor_m: 0.025,
         floor_rad: 0.02,
         growth: 1.2,
         lost_growth: 1.5,

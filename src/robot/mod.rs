@@ -150,7 +150,9 @@ pub struct RobotConfig {
 
 impl RobotConfig {
     /// The defaults of a small indoor robot with an LD06: 500 particles, the likelihood field of
-    /// the Intel lab demo (z_hit 0.95, z_rand 0.05, σ_hit 5 cm, κ 8.25), odometry noise α 0.005,
+    /// the Intel lab demo (z_hit 0.95, z_rand 0.05, σ_hit 5 cm) tempered by κ 64 (chosen for a
+    /// filter that applies every scan: docs/localization.md, "Tempering over time"), odometry
+    /// noise α 0.02 (variance coefficients, AMCL's convention),
     /// resampling below half the particles, at most 2 m/s and 4 rad/s, 100 ms gaps, initial
     /// poses up to σ 100 m, odometry up to 10 s ahead of the device clock, a restart of the
     /// odometry recognised after 1 s of silence, an update at every revolution and a heartbeat
@@ -166,8 +168,8 @@ impl RobotConfig {
             z_rand: 0.05,
             sigma_hit_m: 0.05,
             max_range_m,
-            kappa: 8.25,
-            odom_noise: OdometryNoise::uniform(0.005)?,
+            kappa: 64.0,
+            odom_noise: OdometryNoise::uniform(0.02)?,
             resample_ess_fraction: 0.5,
             min_init_sigma_xy_m: 0.01,
             min_init_sigma_theta_rad: 0.005,
