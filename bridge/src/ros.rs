@@ -139,9 +139,12 @@ impl RosNode {
             .reliability_reliable(WhenFull::DEFAULT)
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 10 });
+        // nav2_amcl's names are relative to its namespace; `/tf` is absolute.
+        let ns = config.namespace.trim_end_matches('/');
+        let relative = |n: &str| name(&format!("{ns}/{n}"));
         let pose_type = || MessageTypeName::new("geometry_msgs", "PoseWithCovarianceStamped");
         let topic = node
-            .create_topic(&name("/amcl_pose")?, pose_type(), &latched)
+            .create_topic(&relative("amcl_pose")?, pose_type(), &latched)
             .map_err(err("topic amcl_pose"))?;
         let amcl_pose = node
             .create_publisher(&topic, None)
@@ -157,7 +160,7 @@ impl RosNode {
             .create_publisher(&topic, None)
             .map_err(err("publisher /tf"))?;
         let topic = node
-            .create_topic(&name("/initialpose")?, pose_type(), &sub_qos)
+            .create_topic(&relative("initialpose")?, pose_type(), &sub_qos)
             .map_err(err("topic initialpose"))?;
         let initialpose = node
             .create_subscription(&topic, None)
@@ -170,15 +173,15 @@ impl RosNode {
         let mut server = |n: &str| {
             node.create_server::<Empty, Empty>(
                 config.service_mapping,
-                &name(n)?,
+                &relative(n)?,
                 &empty,
                 service_qos.clone(),
                 service_qos.clone(),
             )
             .map_err(|e| RosError(format!("service {n}: {e:?}")))
         };
-        let global = server("/reinitialize_global_localization")?;
-        let nomotion = server("/request_nomotion_update")?;
+        let global = server("reinitialize_global_localization")?;
+        let nomotion = server("request_nomotion_update")?;
         Ok(Self {
             _node: node,
             amcl_pose,

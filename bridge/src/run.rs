@@ -79,6 +79,11 @@ pub struct BridgeArgs {
     /// transform_tolerance, max_particles, alpha1–4, initial pose); the rest are listed.
     #[arg(long, value_name = "FILE")]
     pub params: Option<PathBuf>,
+    /// The node's namespace (nav2's multi-robot launch: `robot1`): the node is `NS/amcl`, its
+    /// topics and services `NS/amcl_pose` and so on (`/tf` stays `/tf`), and the params file's
+    /// section for `NS/amcl` is read.
+    #[arg(long, value_name = "NS", default_value = "/")]
+    pub namespace: String,
     /// The DDS domain (ROS_DOMAIN_ID).
     #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0)]
     pub domain_id: u16,
@@ -101,7 +106,13 @@ pub struct BridgeArgs {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct BridgeReport {
     pub link: String,
+    /// The node's fully qualified name (`/amcl`, `/robot1/amcl`).
+    pub node: String,
+    /// nav2_amcl's parameters applied as nav2_amcl applies them.
     pub applied: BTreeMap<String, String>,
+    /// nav2_amcl's parameters applied in another form, and how.
+    pub adapted: BTreeMap<String, String>,
+    /// Parameters not applied, and why (unknown names included).
     pub ignored: BTreeMap<String, String>,
     /// Estimates published on `amcl_pose`.
     pub poses: u64,
@@ -268,6 +279,9 @@ impl std::fmt::Display for BridgeReport {
         for (k, v) in &self.applied {
             writeln!(f, "applied {k}: {v}")?;
         }
+        for (k, v) in &self.adapted {
+            writeln!(f, "adapted {k}: {v}")?;
+        }
         for (k, v) in &self.ignored {
             writeln!(f, "ignored {k}: {v}")?;
         }
@@ -330,6 +344,23 @@ fn post_dated(stamp: Time, tolerance_ns: u64) -> Time {
     Time::from_nanos(stamp.to_nanos().unwrap_or(0).saturating_add(tolerance_ns))
 }
 
+/// `--namespace`: an absolute ROS namespace (`/`, `/robot1`, `/a/b`); a relative one is taken
+/// from the root, a trailing `/` dropped. Each level must be a ROS name (letters, digits and
+/// `_`, not starting with a digit).
+fn normalized_namespace(ns: &str) -> Result<String, BridgeError> {
+    let levels: Vec<&str> = ns.split('/').filter(|l| !l.is_empty()).collect();
+    for l in &levels {
+        let ok = l.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            && !l.starts_with(|c: char| c.is_ascii_digit());
+        if !ok {
+            return Err(BridgeError::Usage(format!(
+                "--namespace {ns:?}: {l:?} is not a ROS name (letters, digits, _)"
+            )));
+        }
+    }
+    Ok(format!("/{}", levels.join("/")))
+}
+
 /// Runs the bridge until the link ends or `args.seconds` pass; progress lines on stderr. An
 /// `Err` is a bridge that could not start; once running, it ends with a report whose
 /// [`BridgeReport::exit_code`] says why.
@@ -357,15 +388,17 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let limit = args
         .seconds
         .and_then(|s| Duration::try_from_secs_f64(s).ok());
+    let namespace = normalized_namespace(&args.namespace)?;
+    let node_name = format!("{}/amcl", namespace.trim_end_matches('/'));
     let params = match &args.params {
-        Some(p) => Nav2Params::read(p).map_err(BridgeError::Params)?,
+        Some(p) => Nav2Params::read_for(p, &node_name).map_err(BridgeError::Params)?,
         None => Nav2Params::default(),
     };
     let frames = params.frames.clone();
     let node_config = NodeConfig {
         domain_id: args.domain_id,
         name: "amcl".into(),
-        namespace: "/".into(),
+        namespace,
         loopback_only: args.loopback_only,
         service_mapping: match args.rmw {
             Rmw::Fastrtps => ServiceMapping::Enhanced,
@@ -376,12 +409,14 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let mut port = Port::open(&endpoint).map_err(BridgeError::Port)?;
     let mut r = BridgeReport {
         link: endpoint.to_string(),
+        node: node_name.clone(),
         applied: params.applied.clone(),
+        adapted: params.adapted.clone(),
         ignored: params.ignored.clone(),
         ..BridgeReport::default()
     };
     eprintln!(
-        "bridge: connected to {endpoint}; node /amcl on domain {}",
+        "bridge: connected to {endpoint}; node {node_name} on domain {}",
         args.domain_id
     );
     if let Some(sp) = params.set_parameters {
@@ -638,6 +673,25 @@ mod tests {
         // Never before the pose.
         assert_eq!(post_dated(Time::MAX, 1), Time::MAX);
         assert_eq!(device_time(u64::MAX), Time::MAX);
+    }
+
+    #[test]
+    fn namespaces_are_absolute_ros_names() {
+        for (given, want) in [
+            ("/", "/"),
+            ("", "/"),
+            ("robot1", "/robot1"),
+            ("/robot1/", "/robot1"),
+            ("/a/b", "/a/b"),
+        ] {
+            assert_eq!(normalized_namespace(given).unwrap(), want, "{given}");
+        }
+        for bad in ["/robot-1", "1robot", "/a/b c", "/ä"] {
+            assert!(
+                matches!(normalized_namespace(bad), Err(BridgeError::Usage(_))),
+                "{bad}"
+            );
+        }
     }
 
     #[test]
