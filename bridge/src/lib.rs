@@ -8,6 +8,7 @@
 //! - [`convert`]: link messages to ROS messages and back;
 //! - [`outbox`]: the newest message of a topic while the DDS writer's window is full;
 //! - [`queue`]: the bounded queue between the link's reader and the bridge's loop;
+//! - [`repeat`]: the last map → odom transform re-sent while no estimate comes;
 //! - [`params`]: a nav2 params file's amcl section;
 //! - [`port`]: the link's bytes;
 //! - [`ros`]: the ROS 2 node.
@@ -19,6 +20,7 @@ pub mod outbox;
 pub mod params;
 pub mod port;
 pub mod queue;
+pub mod repeat;
 pub mod ros;
 mod run;
 

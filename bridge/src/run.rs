@@ -15,7 +15,8 @@ use crate::convert::{self, Refused};
 use crate::msg::{TfMessage, Time};
 use crate::outbox::{self, Outbox, OutboxCounters};
 use crate::params::{Nav2Params, ParamsError};
-use crate::port::{Endpoint, Incoming, Port, PortError};
+use crate::port::{now_ns, Endpoint, Incoming, Port, PortError};
+use crate::repeat::Repeater;
 use crate::ros::{NodeConfig, RosError, RosNode, ServiceCall};
 
 /// Exit code: the bridge ran for `--seconds` and stopped.
@@ -116,8 +117,10 @@ pub struct BridgeReport {
     pub ignored: BTreeMap<String, String>,
     /// Estimates published on `amcl_pose`.
     pub poses: u64,
-    /// Transforms published on `/tf`.
+    /// Transforms published on `/tf` (for estimates and re-sent).
     pub transforms: u64,
+    /// Transforms re-sent while no estimate came ([`crate::repeat`]), offered to `/tf`.
+    pub transforms_repeated: u64,
     /// Estimates not published: the filter was not initialized.
     pub uninitialized: u64,
     pub heartbeats: u64,
@@ -215,8 +218,8 @@ impl std::fmt::Display for BridgeReport {
         )?;
         writeln!(
             f,
-            "published: {} poses on amcl_pose, {} transforms on /tf ({} estimates before initialization not published)",
-            self.poses, self.transforms, self.uninitialized
+            "published: {} poses on amcl_pose, {} transforms on /tf ({} of them re-sent between estimates; {} estimates before initialization not published)",
+            self.poses, self.transforms, self.transforms_repeated, self.uninitialized
         )?;
         writeln!(
             f,
@@ -332,6 +335,13 @@ fn device_time(device_us: u64) -> Time {
     Time::from_nanos(device_us.saturating_mul(1000))
 }
 
+/// The instant a frame that arrived at `arrival_ns` (ns since the Unix epoch, [`now_ns`])
+/// arrived: now less the time since (now, for an arrival stamped in the future).
+fn arrived(arrival_ns: u64) -> Instant {
+    let ago = Duration::from_nanos(now_ns().saturating_sub(arrival_ns));
+    Instant::now().checked_sub(ago).unwrap_or_else(Instant::now)
+}
+
 /// `transform_tolerance`, seconds, in ns (saturating: more than u64 holds is `u64::MAX`).
 fn tolerance_ns(s: f64) -> u64 {
     Duration::try_from_secs_f64(s).map_or(if s > 0.0 { u64::MAX } else { 0 }, |d| {
@@ -435,6 +445,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let tolerance_ns = tolerance_ns(frames.transform_tolerance_s);
     let mut poses: Outbox<crate::msg::PoseWithCovarianceStamped> = Outbox::default();
     let mut transforms: Outbox<TfMessage> = Outbox::default();
+    let mut repeater = Repeater::new();
     let started = Instant::now();
     let mut progress = Instant::now();
     let count = |m: &mut BTreeMap<String, u64>, k: String| *m.entry(k).or_default() += 1;
@@ -463,8 +474,10 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                     arrival_ns,
                 } => match message {
                     Message::Estimate(e) => {
+                        repeater.device_time(e.timestamp_us, arrived(arrival_ns));
                         if !e.flags.contains(EstimateFlags::INITIALIZED) {
                             r.uninitialized += 1;
+                            repeater.forget();
                             continue;
                         }
                         let stamp = match &mut clock {
@@ -489,6 +502,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                                 &frames.global,
                                 &frames.odom,
                             );
+                            repeater.sent(&t, Instant::now());
                             transforms
                                 .offer(
                                     TfMessage {
@@ -501,6 +515,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                         }
                     }
                     Message::Heartbeat(h) => {
+                        repeater.device_time(h.timestamp_us, arrived(arrival_ns));
                         r.heartbeats += 1;
                         r.last_heartbeat = Some(h.into());
                     }
@@ -530,6 +545,23 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                     r.exit_code = EXIT_LINK_LOST;
                     break 'run;
                 }
+            }
+        }
+        if frames.tf_broadcast {
+            let offset_ns = match &clock {
+                Stamper::Host(c) => c.offset_ns(),
+                Stamper::Device => Some(0),
+            };
+            if let Some(t) = repeater.due(Instant::now(), offset_ns, tolerance_ns) {
+                transforms
+                    .offer(
+                        TfMessage {
+                            transforms: vec![t],
+                        },
+                        Instant::now(),
+                        |m| node.publish_tf(m),
+                    )
+                    .unwrap_or_else(ros_failed);
             }
         }
         for m in node.initial_poses() {
@@ -608,6 +640,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     );
     r.poses = poses.counters.published;
     r.transforms = transforms.counters.published;
+    r.transforms_repeated = repeater.repeated;
     r.amcl_pose_outbox = poses.counters;
     r.tf_outbox = transforms.counters;
     if let Stamper::Host(c) = &clock {
@@ -653,6 +686,25 @@ mod tests {
     }
 
     #[test]
+    fn namespaces_are_absolute_ros_names() {
+        for (given, want) in [
+            ("/", "/"),
+            ("", "/"),
+            ("robot1", "/robot1"),
+            ("/robot1/", "/robot1"),
+            ("/a/b", "/a/b"),
+        ] {
+            assert_eq!(normalized_namespace(given).unwrap(), want, "{given}");
+        }
+        for bad in ["/robot-1", "1robot", "/a/b c", "/ä"] {
+            assert!(
+                matches!(normalized_namespace(bad), Err(BridgeError::Usage(_))),
+                "{bad}"
+            );
+        }
+    }
+
+    #[test]
     fn the_transform_tolerance_saturates() {
         assert_eq!(tolerance_ns(1.0), 1_000_000_000);
         assert_eq!(tolerance_ns(0.0), 0);
@@ -673,25 +725,6 @@ mod tests {
         // Never before the pose.
         assert_eq!(post_dated(Time::MAX, 1), Time::MAX);
         assert_eq!(device_time(u64::MAX), Time::MAX);
-    }
-
-    #[test]
-    fn namespaces_are_absolute_ros_names() {
-        for (given, want) in [
-            ("/", "/"),
-            ("", "/"),
-            ("robot1", "/robot1"),
-            ("/robot1/", "/robot1"),
-            ("/a/b", "/a/b"),
-        ] {
-            assert_eq!(normalized_namespace(given).unwrap(), want, "{given}");
-        }
-        for bad in ["/robot-1", "1robot", "/a/b c", "/ä"] {
-            assert!(
-                matches!(normalized_namespace(bad), Err(BridgeError::Usage(_))),
-                "{bad}"
-            );
-        }
     }
 
     #[test]
