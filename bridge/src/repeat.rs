@@ -6,10 +6,11 @@
 //!
 //! [`Repeater`] re-sends the last transform every [`INTERVAL`] (the LiDAR's 10 Hz) when no
 //! estimate has come in that time, while the device shows it is alive: an estimate or a
-//! heartbeat within [`DEVICE_SILENT_AFTER`]. The stamp is the device's current time on the
-//! stamps' clock plus `transform_tolerance`: the latest device time received, advanced by the
-//! computer's time since it arrived, mapped as estimates are (`--clock host`: plus the clock
-//! model's offset). A stamp that is not later than the last transform's is not sent.
+//! heartbeat within [`DEVICE_SILENT_AFTER`]. The stamp is the last transform's (its estimate's
+//! time plus `transform_tolerance`) advanced by the computer's time since that estimate arrived:
+//! the current time on the stamps' clock plus `transform_tolerance`, as a scan's would be (later
+//! than the next estimate's only when that estimate takes longer from its scan to the bridge
+//! than the last one did). A stamp that is not later than the last transform's is not sent.
 
 use std::time::{Duration, Instant};
 
@@ -26,10 +27,10 @@ pub const DEVICE_SILENT_AFTER: Duration = Duration::from_millis(2500);
 /// The last map → odom transform and what is needed to re-send it.
 #[derive(Clone, Debug, Default)]
 pub struct Repeater {
-    /// The last transform sent for an estimate.
-    last: Option<TransformStamped>,
-    /// The latest device time received (µs on the device's clock) and when it arrived.
-    device: Option<(u64, Instant)>,
+    /// The last transform sent for an estimate, and when that estimate arrived.
+    last: Option<(TransformStamped, Instant)>,
+    /// When the device last showed it is alive (an estimate or a heartbeat arrived).
+    alive: Option<Instant>,
     /// The last transform's stamp (for an estimate or re-sent), ns since the clock's epoch.
     last_stamp_ns: Option<u64>,
     /// When a transform was last sent (for an estimate or re-sent).
@@ -43,17 +44,16 @@ impl Repeater {
         Self::default()
     }
 
-    /// A frame from the device with its time (`device_us`, µs on its clock), arrived `at`: it
-    /// is alive.
-    pub fn device_time(&mut self, device_us: u64, at: Instant) {
-        self.device = Some((device_us, at));
+    /// A frame from the device (an estimate or a heartbeat) arrived `at`: it is alive.
+    pub fn alive(&mut self, at: Instant) {
+        self.alive = Some(self.alive.map_or(at, |a| a.max(at)));
     }
 
-    /// The transform sent for an estimate at `at`.
-    pub fn sent(&mut self, t: &TransformStamped, at: Instant) {
+    /// The transform sent for an estimate that arrived `arrived`, sent at `now`.
+    pub fn sent(&mut self, t: &TransformStamped, arrived: Instant, now: Instant) {
         self.last_stamp_ns = t.header.stamp.to_nanos();
-        self.last = Some(t.clone());
-        self.last_sent = Some(at);
+        self.last = Some((t.clone(), arrived));
+        self.last_sent = Some(now);
     }
 
     /// The filter is no longer initialized: there is no transform to re-send (nav2_amcl sends
@@ -62,19 +62,11 @@ impl Repeater {
         self.last = None;
     }
 
-    /// The transform to re-send at `now`, if one is due: the last one stamped with the device's
-    /// current time mapped with `offset_ns` (host − device, ns; `None`: no mapping yet) plus
-    /// `tolerance_ns`, saturating at [`Time::MAX`].
-    pub fn due(
-        &mut self,
-        now: Instant,
-        offset_ns: Option<i128>,
-        tolerance_ns: u64,
-    ) -> Option<TransformStamped> {
-        let last = self.last.as_ref()?;
-        let (device_us, arrived) = self.device?;
-        let since_device = now.saturating_duration_since(arrived);
-        if since_device > DEVICE_SILENT_AFTER {
+    /// The transform to re-send at `now`, if one is due: the last one, its stamp advanced by the
+    /// time since its estimate arrived (saturating at [`Time::MAX`]).
+    pub fn due(&mut self, now: Instant) -> Option<TransformStamped> {
+        let (last, arrived) = self.last.as_ref()?;
+        if now.saturating_duration_since(self.alive?) > DEVICE_SILENT_AFTER {
             return None;
         }
         if self
@@ -85,12 +77,9 @@ impl Repeater {
         }
         // Whatever the outcome, the next try is an interval away.
         self.last_sent = Some(now);
-        let device_now_ns = i128::from(device_us) * 1000 + since_device.as_nanos() as i128;
-        let mapped = device_now_ns.checked_add(offset_ns?)?;
-        let stamp_ns = u64::try_from(mapped.max(0))
-            .unwrap_or(u64::MAX)
-            .saturating_add(tolerance_ns);
-        let stamp = Time::from_nanos(stamp_ns);
+        let since =
+            u64::try_from(now.saturating_duration_since(*arrived).as_nanos()).unwrap_or(u64::MAX);
+        let stamp = Time::from_nanos(last.header.stamp.to_nanos()?.saturating_add(since));
         let stamp_ns = stamp.to_nanos()?;
         if self.last_stamp_ns.is_some_and(|l| stamp_ns <= l) {
             return None;
@@ -109,9 +98,8 @@ mod tests {
     use crate::msg::{Header, Quaternion, Transform, Vector3};
 
     const MS: Duration = Duration::from_millis(1);
-    const TOLERANCE_NS: u64 = 1_000_000_000;
-    /// Host − device, ns.
-    const OFFSET: i128 = 1_700_000_000_000_000_000;
+    /// The first estimate's transform stamp, ns (its time plus the tolerance).
+    const STAMP0: u64 = 1_700_000_001_000_000_000;
 
     fn transform(stamp_ns: u64) -> TransformStamped {
         TransformStamped {
@@ -131,37 +119,37 @@ mod tests {
         }
     }
 
-    /// A repeater that sent an estimate's transform at `t0`, for a scan at device time 10 s
-    /// (50 ms before the estimate arrived), stamped as the bridge stamps it.
+    /// A repeater that sent an estimate's transform, the estimate having arrived at `t0` and
+    /// been sent 2 ms later.
     fn after_estimate(t0: Instant) -> Repeater {
         let mut r = Repeater::new();
-        let scan_us = 10_000_000u64;
-        r.device_time(scan_us + 50_000, t0);
-        let stamp = (i128::from(scan_us) * 1000 + OFFSET) as u64 + TOLERANCE_NS;
-        r.sent(&transform(stamp), t0);
+        r.alive(t0);
+        r.sent(&transform(STAMP0), t0, t0 + 2 * MS);
         r
     }
 
     #[test]
-    fn the_last_transform_is_resent_every_interval_stamped_now_plus_the_tolerance() {
+    fn the_last_transform_is_resent_every_interval_stamped_as_time_went_on() {
         let t0 = Instant::now();
         let mut r = after_estimate(t0);
         // Not within an interval of the estimate's transform.
-        assert!(r.due(t0 + 99 * MS, Some(OFFSET), TOLERANCE_NS).is_none());
+        assert!(r.due(t0 + 101 * MS).is_none());
         for k in 1..=20u32 {
-            let now = t0 + INTERVAL * k;
-            let t = r.due(now, Some(OFFSET), TOLERANCE_NS).expect("due");
+            let now = t0 + 2 * MS + INTERVAL * k;
+            // A heartbeat every second.
+            if k % 10 == 0 {
+                r.alive(now);
+            }
+            let t = r.due(now).expect("due");
             // The same transform, frames included.
             let mut same = t.clone();
-            same.header.stamp = transform(0).header.stamp;
-            assert_eq!(same, transform(0));
-            // The device's time then (its last message's time plus the time since), mapped,
-            // plus the tolerance.
-            let want =
-                (10_050_000_000i128 + i128::from(k) * 100_000_000 + OFFSET) as u64 + TOLERANCE_NS;
+            same.header.stamp = transform(STAMP0).header.stamp;
+            assert_eq!(same, transform(STAMP0));
+            // The estimate's stamp plus the time since it arrived.
+            let want = STAMP0 + 2_000_000 + u64::from(k) * 100_000_000;
             assert_eq!(t.header.stamp.to_nanos(), Some(want), "k {k}");
             // Nothing more until the next interval.
-            assert!(r.due(now + 50 * MS, Some(OFFSET), TOLERANCE_NS).is_none());
+            assert!(r.due(now + 50 * MS).is_none());
         }
         assert_eq!(r.repeated, 20);
     }
@@ -172,11 +160,9 @@ mod tests {
         let mut r = after_estimate(t0);
         for k in 1..50u32 {
             let now = t0 + 90 * MS * k;
-            assert!(r.due(now, Some(OFFSET), TOLERANCE_NS).is_none(), "{k}");
-            let device_us = 10_050_000 + u64::from(k) * 90_000;
-            r.device_time(device_us, now);
-            let stamp = (i128::from(device_us) * 1000 + OFFSET) as u64 + TOLERANCE_NS;
-            r.sent(&transform(stamp), now);
+            assert!(r.due(now).is_none(), "{k}");
+            r.alive(now);
+            r.sent(&transform(STAMP0 + u64::from(k) * 90_000_000), now, now);
         }
         assert_eq!(r.repeated, 0);
     }
@@ -185,48 +171,43 @@ mod tests {
     fn a_silent_device_stops_the_resending_and_a_heartbeat_keeps_it_going() {
         let t0 = Instant::now();
         let mut r = after_estimate(t0);
-        // Heartbeats at 1 s and 2 s of device time after the estimate's frame.
-        r.device_time(11_050_000, t0 + 1000 * MS);
-        r.device_time(12_050_000, t0 + 2000 * MS);
-        assert!(r.due(t0 + 4400 * MS, Some(OFFSET), TOLERANCE_NS).is_some());
+        // Heartbeats 1 s and 2 s after the estimate.
+        r.alive(t0 + 1000 * MS);
+        r.alive(t0 + 2000 * MS);
+        assert!(r.due(t0 + 4400 * MS).is_some());
         // 2.5 s after the last heartbeat: the device is taken as gone.
-        assert!(r.due(t0 + 4501 * MS, Some(OFFSET), TOLERANCE_NS).is_none());
-        assert!(r.due(t0 + 9000 * MS, Some(OFFSET), TOLERANCE_NS).is_none());
+        assert!(r.due(t0 + 4501 * MS).is_none());
+        assert!(r.due(t0 + 9000 * MS).is_none());
         // It comes back.
-        r.device_time(19_050_000, t0 + 9000 * MS);
-        assert!(r.due(t0 + 9100 * MS, Some(OFFSET), TOLERANCE_NS).is_some());
+        r.alive(t0 + 9000 * MS);
+        assert!(r.due(t0 + 9100 * MS).is_some());
     }
 
     #[test]
     fn a_stamp_not_later_than_the_last_is_not_sent() {
         let t0 = Instant::now();
-        let mut r = after_estimate(t0);
-        // The device restarted: its time is back near 0, and the clock has not re-anchored.
-        r.device_time(1_000, t0 + 50 * MS);
+        // The latest stamp already: it saturates and is not later.
+        let mut r = Repeater::new();
+        r.alive(t0);
+        r.sent(&transform(Time::MAX.to_nanos().unwrap()), t0, t0);
         for k in 1..10u32 {
-            assert!(r
-                .due(t0 + INTERVAL * k, Some(OFFSET), TOLERANCE_NS)
-                .is_none());
+            assert!(r.due(t0 + INTERVAL * k).is_none());
         }
-        // A huge tolerance saturates at the latest stamp once, then nothing more.
-        let mut r = after_estimate(t0);
-        let t = r.due(t0 + INTERVAL, Some(OFFSET), u64::MAX).unwrap();
-        assert_eq!(t.header.stamp, Time::MAX);
-        assert!(r.due(t0 + INTERVAL * 2, Some(OFFSET), u64::MAX).is_none());
-        assert_eq!(r.repeated, 1);
+        assert_eq!(r.repeated, 0);
     }
 
     #[test]
-    fn nothing_is_resent_without_a_transform_or_a_clock() {
+    fn nothing_is_resent_without_a_transform_or_a_sign_of_life() {
         let t0 = Instant::now();
         let mut r = Repeater::new();
-        r.device_time(5_000_000, t0);
-        assert!(r.due(t0 + INTERVAL, Some(OFFSET), TOLERANCE_NS).is_none());
-        let mut r = after_estimate(t0);
-        assert!(r.due(t0 + INTERVAL, None, TOLERANCE_NS).is_none());
+        r.alive(t0);
+        assert!(r.due(t0 + INTERVAL).is_none());
+        let mut r = Repeater::new();
+        r.sent(&transform(STAMP0), t0, t0);
+        assert!(r.due(t0 + INTERVAL).is_none());
         let mut r = after_estimate(t0);
         r.forget();
-        assert!(r.due(t0 + INTERVAL, Some(OFFSET), TOLERANCE_NS).is_none());
+        assert!(r.due(t0 + INTERVAL * 2).is_none());
         assert_eq!(r.repeated, 0);
     }
 }

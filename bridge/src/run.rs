@@ -474,7 +474,8 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                     arrival_ns,
                 } => match message {
                     Message::Estimate(e) => {
-                        repeater.device_time(e.timestamp_us, arrived(arrival_ns));
+                        let at = arrived(arrival_ns);
+                        repeater.alive(at);
                         if !e.flags.contains(EstimateFlags::INITIALIZED) {
                             r.uninitialized += 1;
                             repeater.forget();
@@ -502,7 +503,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                                 &frames.global,
                                 &frames.odom,
                             );
-                            repeater.sent(&t, Instant::now());
+                            repeater.sent(&t, at, Instant::now());
                             transforms
                                 .offer(
                                     TfMessage {
@@ -515,7 +516,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                         }
                     }
                     Message::Heartbeat(h) => {
-                        repeater.device_time(h.timestamp_us, arrived(arrival_ns));
+                        repeater.alive(arrived(arrival_ns));
                         r.heartbeats += 1;
                         r.last_heartbeat = Some(h.into());
                     }
@@ -548,11 +549,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
             }
         }
         if frames.tf_broadcast {
-            let offset_ns = match &clock {
-                Stamper::Host(c) => c.offset_ns(),
-                Stamper::Device => Some(0),
-            };
-            if let Some(t) = repeater.due(Instant::now(), offset_ns, tolerance_ns) {
+            if let Some(t) = repeater.due(Instant::now()) {
                 transforms
                     .offer(
                         TfMessage {
