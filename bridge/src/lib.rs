@@ -5,6 +5,7 @@
 //!
 //! - [`msg`]: the ROS 2 messages, laid out as CDR has them;
 //! - [`clock`]: the device's clock on the computer's (`--clock host`);
+//! - [`lifecycle`]: the managed-node state machine nav2's lifecycle manager drives;
 //! - [`convert`]: link messages to ROS messages and back;
 //! - [`outbox`]: the newest message of a topic while the DDS writer's window is full;
 //! - [`queue`]: the bounded queue between the link's reader and the bridge's loop;
@@ -15,6 +16,7 @@
 
 pub mod clock;
 pub mod convert;
+pub mod lifecycle;
 pub mod msg;
 pub mod outbox;
 pub mod params;

@@ -153,7 +153,7 @@ fn not_supported(name: &str) -> Option<&'static str> {
         "always_reset_initial_pose" => "the device starts from its saved estimate or the initial pose sent",
         "initial_pose.z" => "the device is planar: z is not used (nav2_amcl's filter does not use it either)",
         "bond_heartbeat_period" | "bond_disable_heartbeat_timeout" => "no bond with nav2's lifecycle manager",
-        "autostart_node" => "the bridge is not a lifecycle node: it runs from the start",
+        "autostart_node" => "--lifecycle or not decides whether the node starts unconfigured or active",
         "introspection_mode" => "no service introspection: the bridge's services publish no service events",
         _ => return None,
     })

@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use crate::clock::{ClockCounters, HostClock};
 use crate::convert::{self, Refused};
+use crate::lifecycle::State as LifecycleState;
 use crate::msg::{TfMessage, Time};
 use crate::outbox::{self, Outbox, OutboxCounters};
 use crate::params::{Nav2Params, ParamsError};
@@ -27,6 +28,10 @@ pub const EXIT_CANNOT_START: u8 = 1;
 pub const EXIT_USAGE: u8 = 2;
 /// Exit code: the link ended (end of stream, a read or write error, a serial hang-up).
 pub const EXIT_LINK_LOST: u8 = 3;
+
+/// How long the bridge goes on after a lifecycle `shutdown` before it ends: the answer to the
+/// request travels on a reliable writer that ends with the node.
+pub const FINALIZED_LINGER: Duration = Duration::from_millis(500);
 
 /// Examples of refused frames kept in the report (the counts by kind cover all of them).
 pub const REFUSED_EXAMPLES: usize = 8;
@@ -85,6 +90,10 @@ pub struct BridgeArgs {
     /// section for `NS/amcl` is read.
     #[arg(long, value_name = "NS", default_value = "/")]
     pub namespace: String,
+    /// Start unconfigured and publish only once activated through the lifecycle services
+    /// (`amcl/change_state`: nav2's lifecycle manager). Without it the node starts active.
+    #[arg(long)]
+    pub lifecycle: bool,
     /// The DDS domain (ROS_DOMAIN_ID).
     #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0)]
     pub domain_id: u16,
@@ -123,6 +132,12 @@ pub struct BridgeReport {
     pub transforms_repeated: u64,
     /// Estimates not published: the filter was not initialized.
     pub uninitialized: u64,
+    /// Estimates not published: the node was not active (`--lifecycle`).
+    pub not_active: u64,
+    /// Lifecycle transitions made on request, in order (`unconfigured -> inactive`).
+    pub lifecycle_transitions: Vec<String>,
+    /// The lifecycle state at the end.
+    pub lifecycle_state: String,
     pub heartbeats: u64,
     /// Frames the decoder refused (CRC, length, range …) and messages the bridge does not
     /// take, counted by kind.
@@ -220,6 +235,17 @@ impl std::fmt::Display for BridgeReport {
             f,
             "published: {} poses on amcl_pose, {} transforms on /tf ({} of them re-sent between estimates; {} estimates before initialization not published)",
             self.poses, self.transforms, self.transforms_repeated, self.uninitialized
+        )?;
+        writeln!(
+            f,
+            "lifecycle: {} at the end, {} estimates while not active; transitions: {}",
+            self.lifecycle_state,
+            self.not_active,
+            if self.lifecycle_transitions.is_empty() {
+                "none".to_owned()
+            } else {
+                self.lifecycle_transitions.join(", ")
+            }
         )?;
         writeln!(
             f,
@@ -446,6 +472,12 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let mut poses: Outbox<crate::msg::PoseWithCovarianceStamped> = Outbox::default();
     let mut transforms: Outbox<TfMessage> = Outbox::default();
     let mut repeater = Repeater::new();
+    let mut finalized_at: Option<Instant> = None;
+    let mut state = if args.lifecycle {
+        LifecycleState::Unconfigured
+    } else {
+        LifecycleState::Active
+    };
     let started = Instant::now();
     let mut progress = Instant::now();
     let count = |m: &mut BTreeMap<String, u64>, k: String| *m.entry(k).or_default() += 1;
@@ -479,6 +511,10 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                         if !e.flags.contains(EstimateFlags::INITIALIZED) {
                             r.uninitialized += 1;
                             repeater.forget();
+                            continue;
+                        }
+                        if state != LifecycleState::Active {
+                            r.not_active += 1;
                             continue;
                         }
                         let stamp = match &mut clock {
@@ -548,7 +584,26 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                 }
             }
         }
-        if frames.tf_broadcast {
+        for c in node.lifecycle_calls(&mut state) {
+            match c {
+                Ok(c) => {
+                    eprintln!("bridge: lifecycle {} -> {}", c.from.label(), c.to.label());
+                    r.lifecycle_transitions
+                        .push(format!("{} -> {}", c.from.label(), c.to.label()));
+                }
+                Err(e) => eprintln!("bridge: {e}"),
+            }
+        }
+        if state == LifecycleState::Finalized {
+            // The shutdown's answer must reach its caller before the node goes.
+            let at = *finalized_at.get_or_insert_with(Instant::now);
+            if at.elapsed() >= FINALIZED_LINGER {
+                r.ended = "the node was shut down through its lifecycle".into();
+                r.exit_code = EXIT_STOPPED;
+                break;
+            }
+        }
+        if frames.tf_broadcast && state == LifecycleState::Active {
             if let Some(t) = repeater.due(Instant::now()) {
                 transforms
                     .offer(
@@ -638,6 +693,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     r.poses = poses.counters.published;
     r.transforms = transforms.counters.published;
     r.transforms_repeated = repeater.repeated;
+    r.lifecycle_state = state.label().into();
     r.amcl_pose_outbox = poses.counters;
     r.tf_outbox = transforms.counters;
     if let Stamper::Host(c) = &clock {

@@ -132,6 +132,7 @@ fn map_to_odom_is_resent_while_the_device_is_alive_and_stops_when_it_is_silent()
         baud: 230_400,
         params: Some(params),
         namespace: "/".into(),
+        lifecycle: false,
         domain_id: domain,
         loopback_only: true,
         rmw: Rmw::Fastrtps,
