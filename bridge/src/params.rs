@@ -110,7 +110,7 @@ impl std::fmt::Display for ParamsError {
                 } else {
                     write!(f, "; the file has sections for {}", sections.join(", "))?;
                     if sections.iter().any(|s| s.ends_with("/amcl")) {
-                        f.write_str(" (a namespace: give it with --namespace)")?;
+                        f.write_str(" (for a section /NS/amcl, run with --namespace NS)")?;
                     }
                     Ok(())
                 }
