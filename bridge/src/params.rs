@@ -128,8 +128,8 @@ pub const NODE: &str = "/amcl";
 /// Why each nav2_amcl parameter without a counterpart is not applied. The names are those
 /// nav2_amcl declares (`AmclNode::initParameters` on navigation2's main branch, and
 /// `random_seed`, `initialize_at_saved_pose`, `saved_pose_filepath` added after it), those its
-/// base class `nav2::LifecycleNode` and its service servers declare, and rclcpp's
-/// `use_sim_time` (docs/nav2.md, "nav2_amcl's parameters").
+/// base class `nav2::LifecycleNode`, its `declare_or_get_parameter` and its service servers
+/// declare, and rclcpp's `use_sim_time` (docs/nav2.md, "nav2_amcl's parameters").
 fn not_supported(name: &str) -> Option<&'static str> {
     Some(match name {
         "alpha5" => "omnidirectional motion model only; the device uses the differential one",
@@ -155,6 +155,9 @@ fn not_supported(name: &str) -> Option<&'static str> {
         "bond_heartbeat_period" | "bond_disable_heartbeat_timeout" => "no bond with nav2's lifecycle manager",
         "autostart_node" => "--lifecycle or not decides whether the node starts unconfigured or active",
         "introspection_mode" => "no service introspection: the bridge's services publish no service events",
+        "warn_on_missing_params" | "strict_param_loading" => {
+            "a parameter missing from the file keeps its default (the device's or nav2_amcl's): nothing is warned about or refused"
+        }
         _ => return None,
     })
 }
@@ -743,7 +746,7 @@ amcl:
     /// nav2_amcl's parameters as declared on navigation2's main branch (`initParameters`),
     /// those added after it (`random_seed`, pose persistence), its base class's and
     /// rclcpp's: facts from the sources named in docs/nav2.md.
-    const NAV2_AMCL_PARAMETERS: [&str; 54] = [
+    const NAV2_AMCL_PARAMETERS: [&str; 56] = [
         "alpha1",
         "alpha2",
         "alpha3",
@@ -797,6 +800,8 @@ amcl:
         "bond_disable_heartbeat_timeout",
         "autostart_node",
         "introspection_mode",
+        "warn_on_missing_params",
+        "strict_param_loading",
         "use_sim_time",
     ];
 
@@ -820,6 +825,8 @@ amcl:
             | "initialize_at_saved_pose"
             | "bond_disable_heartbeat_timeout"
             | "autostart_node"
+            | "warn_on_missing_params"
+            | "strict_param_loading"
             | "use_sim_time" => "true",
             "introspection_mode" => "disabled",
             "max_particles" | "min_particles" | "max_beams" | "resample_interval"
@@ -858,7 +865,7 @@ amcl:
         }
         assert_eq!(
             p.applied.len() + p.adapted.len() + p.ignored.len(),
-            54,
+            56,
             "{p:#?}"
         );
         // A name nav2_amcl does not have.
