@@ -5,20 +5,24 @@
 //!
 //! - [`msg`]: the ROS 2 messages, laid out as CDR has them;
 //! - [`clock`]: the device's clock on the computer's (`--clock host`);
+//! - [`lifecycle`]: the managed-node state machine nav2's lifecycle manager drives;
 //! - [`convert`]: link messages to ROS messages and back;
 //! - [`outbox`]: the newest message of a topic while the DDS writer's window is full;
 //! - [`queue`]: the bounded queue between the link's reader and the bridge's loop;
+//! - [`repeat`]: the last map → odom transform re-sent while no estimate comes;
 //! - [`params`]: a nav2 params file's amcl section;
 //! - [`port`]: the link's bytes;
 //! - [`ros`]: the ROS 2 node.
 
 pub mod clock;
 pub mod convert;
+pub mod lifecycle;
 pub mod msg;
 pub mod outbox;
 pub mod params;
 pub mod port;
 pub mod queue;
+pub mod repeat;
 pub mod ros;
 mod run;
 

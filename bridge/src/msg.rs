@@ -202,6 +202,63 @@ pub struct Empty {
 }
 impl Message for Empty {}
 
+/// `lifecycle_msgs/State`: a managed node's state (ids as rcl_lifecycle numbers them).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LifecycleState {
+    pub id: u8,
+    pub label: String,
+}
+
+/// `lifecycle_msgs/Transition`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LifecycleTransition {
+    pub id: u8,
+    pub label: String,
+}
+
+/// `lifecycle_msgs/TransitionDescription`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TransitionDescription {
+    pub transition: LifecycleTransition,
+    pub start_state: LifecycleState,
+    pub goal_state: LifecycleState,
+}
+
+/// `lifecycle_msgs/GetState`'s response (its request is empty: [`Empty`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GetStateResponse {
+    pub current_state: LifecycleState,
+}
+impl Message for GetStateResponse {}
+
+/// `lifecycle_msgs/ChangeState`'s request.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ChangeStateRequest {
+    pub transition: LifecycleTransition,
+}
+impl Message for ChangeStateRequest {}
+
+/// `lifecycle_msgs/ChangeState`'s response.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ChangeStateResponse {
+    pub success: bool,
+}
+impl Message for ChangeStateResponse {}
+
+/// `lifecycle_msgs/GetAvailableStates`' response.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GetAvailableStatesResponse {
+    pub available_states: Vec<LifecycleState>,
+}
+impl Message for GetAvailableStatesResponse {}
+
+/// `lifecycle_msgs/GetAvailableTransitions`' response (also `get_transition_graph`'s).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GetAvailableTransitionsResponse {
+    pub available_transitions: Vec<TransitionDescription>,
+}
+impl Message for GetAvailableTransitionsResponse {}
+
 #[cfg(test)]
 mod tests {
     use super::*;

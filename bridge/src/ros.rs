@@ -8,6 +8,7 @@
 //! | `initialpose` | subscription | geometry_msgs/PoseWithCovarianceStamped | reliable, volatile, depth 10 |
 //! | `reinitialize_global_localization` | service | std_srvs/Empty | services' default |
 //! | `request_nomotion_update` | service | std_srvs/Empty | services' default |
+//! | `amcl/get_state`, `amcl/change_state`, `amcl/get_available_states`, `amcl/get_available_transitions` | services | lifecycle_msgs | services' default |
 //!
 //! With `loopback_only`, the DDS participant uses only 127.0.0.1: multicast is joined and sent
 //! on no other interface, only the loopback address is advertised in discovery, and peers on
@@ -21,7 +22,12 @@ use ros2_client::{
     ServiceMapping, ServiceTypeName, Subscription,
 };
 
-use crate::msg::{Empty, PoseWithCovarianceStamped, TfMessage};
+use crate::lifecycle::{self, State};
+use crate::msg::{
+    ChangeStateRequest, ChangeStateResponse, Empty, GetAvailableStatesResponse,
+    GetAvailableTransitionsResponse, GetStateResponse, LifecycleState, PoseWithCovarianceStamped,
+    TfMessage,
+};
 
 /// How the node is set up.
 #[derive(Clone, Debug)]
@@ -53,6 +59,17 @@ pub struct RosNode {
     initialpose: Subscription<PoseWithCovarianceStamped>,
     global: Server<Empty, Empty>,
     nomotion: Server<Empty, Empty>,
+    get_state: Server<Empty, GetStateResponse>,
+    change_state: Server<ChangeStateRequest, ChangeStateResponse>,
+    get_available_states: Server<Empty, GetAvailableStatesResponse>,
+    get_available_transitions: Server<Empty, GetAvailableTransitionsResponse>,
+}
+
+/// A lifecycle transition a caller requested and the bridge made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Changed {
+    pub from: State,
+    pub to: State,
 }
 
 /// A ROS 2 side that could not be set up or failed.
@@ -139,9 +156,12 @@ impl RosNode {
             .reliability_reliable(WhenFull::DEFAULT)
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 10 });
+        // nav2_amcl's names are relative to its namespace; `/tf` is absolute.
+        let ns = config.namespace.trim_end_matches('/');
+        let relative = |n: &str| name(&format!("{ns}/{n}"));
         let pose_type = || MessageTypeName::new("geometry_msgs", "PoseWithCovarianceStamped");
         let topic = node
-            .create_topic(&name("/amcl_pose")?, pose_type(), &latched)
+            .create_topic(&relative("amcl_pose")?, pose_type(), &latched)
             .map_err(err("topic amcl_pose"))?;
         let amcl_pose = node
             .create_publisher(&topic, None)
@@ -157,7 +177,7 @@ impl RosNode {
             .create_publisher(&topic, None)
             .map_err(err("publisher /tf"))?;
         let topic = node
-            .create_topic(&name("/initialpose")?, pose_type(), &sub_qos)
+            .create_topic(&relative("initialpose")?, pose_type(), &sub_qos)
             .map_err(err("topic initialpose"))?;
         let initialpose = node
             .create_subscription(&topic, None)
@@ -170,15 +190,63 @@ impl RosNode {
         let mut server = |n: &str| {
             node.create_server::<Empty, Empty>(
                 config.service_mapping,
-                &name(n)?,
+                &relative(n)?,
                 &empty,
                 service_qos.clone(),
                 service_qos.clone(),
             )
             .map_err(|e| RosError(format!("service {n}: {e:?}")))
         };
-        let global = server("/reinitialize_global_localization")?;
-        let nomotion = server("/request_nomotion_update")?;
+        let global = server("reinitialize_global_localization")?;
+        let nomotion = server("request_nomotion_update")?;
+        // The lifecycle services are the node's own: `<node>/get_state` and so on.
+        let node_name = &config.name;
+        let lifecycle_name = |n: &str, srv: &str| -> Result<(Name, ServiceTypeName), RosError> {
+            Ok((
+                relative(&format!("{node_name}/{n}"))?,
+                ServiceTypeName::new("lifecycle_msgs", srv),
+            ))
+        };
+        let (n, t) = lifecycle_name("get_state", "GetState")?;
+        let get_state = node
+            .create_server(
+                config.service_mapping,
+                &n,
+                &t,
+                service_qos.clone(),
+                service_qos.clone(),
+            )
+            .map_err(|e| RosError(format!("service get_state: {e:?}")))?;
+        let (n, t) = lifecycle_name("change_state", "ChangeState")?;
+        let change_state = node
+            .create_server(
+                config.service_mapping,
+                &n,
+                &t,
+                service_qos.clone(),
+                service_qos.clone(),
+            )
+            .map_err(|e| RosError(format!("service change_state: {e:?}")))?;
+        let (n, t) = lifecycle_name("get_available_states", "GetAvailableStates")?;
+        let get_available_states = node
+            .create_server(
+                config.service_mapping,
+                &n,
+                &t,
+                service_qos.clone(),
+                service_qos.clone(),
+            )
+            .map_err(|e| RosError(format!("service get_available_states: {e:?}")))?;
+        let (n, t) = lifecycle_name("get_available_transitions", "GetAvailableTransitions")?;
+        let get_available_transitions = node
+            .create_server(
+                config.service_mapping,
+                &n,
+                &t,
+                service_qos.clone(),
+                service_qos,
+            )
+            .map_err(|e| RosError(format!("service get_available_transitions: {e:?}")))?;
         Ok(Self {
             _node: node,
             amcl_pose,
@@ -186,6 +254,10 @@ impl RosNode {
             initialpose,
             global,
             nomotion,
+            get_state,
+            change_state,
+            get_available_states,
+            get_available_transitions,
         })
     }
 
@@ -220,6 +292,97 @@ impl RosNode {
                 }
             }
         }
+    }
+
+    /// Answers the lifecycle requests that arrived: the state, the available states and
+    /// transitions, and `change_state`, which moves `state` when the transition exists from it
+    /// ([`lifecycle::change`]). Returns the transitions made; a request that could not be read
+    /// or answered is an `Err` (the bridge goes on).
+    pub fn lifecycle_calls(&mut self, state: &mut State) -> Vec<Result<Changed, RosError>> {
+        let mut out = Vec::new();
+        let failed = |what: &str, e: &dyn std::fmt::Debug| RosError(format!("{what}: {e:?}"));
+        while let Some(r) = self.get_state.receive_request().transpose() {
+            match r {
+                Ok((id, _)) => {
+                    let a = GetStateResponse {
+                        current_state: state.message(),
+                    };
+                    if let Err(e) = self.get_state.send_response(id, a) {
+                        out.push(Err(failed("answering get_state", &e)));
+                    }
+                }
+                Err(e) => {
+                    out.push(Err(failed("reading a get_state request", &e)));
+                    break;
+                }
+            }
+        }
+        while let Some(r) = self.get_available_states.receive_request().transpose() {
+            match r {
+                Ok((id, _)) => {
+                    let a = GetAvailableStatesResponse {
+                        available_states: lifecycle::ALL_STATES
+                            .iter()
+                            .map(|(id, label)| LifecycleState {
+                                id: *id,
+                                label: (*label).into(),
+                            })
+                            .collect(),
+                    };
+                    if let Err(e) = self.get_available_states.send_response(id, a) {
+                        out.push(Err(failed("answering get_available_states", &e)));
+                    }
+                }
+                Err(e) => {
+                    out.push(Err(failed("reading a get_available_states request", &e)));
+                    break;
+                }
+            }
+        }
+        while let Some(r) = self.get_available_transitions.receive_request().transpose() {
+            match r {
+                Ok((id, _)) => {
+                    let a = GetAvailableTransitionsResponse {
+                        available_transitions: lifecycle::available(*state)
+                            .map(lifecycle::Transition::description)
+                            .collect(),
+                    };
+                    if let Err(e) = self.get_available_transitions.send_response(id, a) {
+                        out.push(Err(failed("answering get_available_transitions", &e)));
+                    }
+                }
+                Err(e) => {
+                    out.push(Err(failed(
+                        "reading a get_available_transitions request",
+                        &e,
+                    )));
+                    break;
+                }
+            }
+        }
+        while let Some(r) = self.change_state.receive_request().transpose() {
+            match r {
+                Ok((id, req)) => {
+                    let from = *state;
+                    let to = lifecycle::change(from, req.transition.id, &req.transition.label);
+                    if let Some(to) = to {
+                        *state = to;
+                        out.push(Ok(Changed { from, to }));
+                    }
+                    let a = ChangeStateResponse {
+                        success: to.is_some(),
+                    };
+                    if let Err(e) = self.change_state.send_response(id, a) {
+                        out.push(Err(failed("answering change_state", &e)));
+                    }
+                }
+                Err(e) => {
+                    out.push(Err(failed("reading a change_state request", &e)));
+                    break;
+                }
+            }
+        }
+        out
     }
 
     /// The service calls that arrived, each already answered (std_srvs/Empty carries nothing

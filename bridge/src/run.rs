@@ -12,10 +12,12 @@ use serde::Serialize;
 
 use crate::clock::{ClockCounters, HostClock};
 use crate::convert::{self, Refused};
+use crate::lifecycle::State as LifecycleState;
 use crate::msg::{TfMessage, Time};
 use crate::outbox::{self, Outbox, OutboxCounters};
 use crate::params::{Nav2Params, ParamsError};
-use crate::port::{Endpoint, Incoming, Port, PortError};
+use crate::port::{now_ns, Endpoint, Incoming, Port, PortError};
+use crate::repeat::Repeater;
 use crate::ros::{NodeConfig, RosError, RosNode, ServiceCall};
 
 /// Exit code: the bridge ran for `--seconds` and stopped.
@@ -26,6 +28,10 @@ pub const EXIT_CANNOT_START: u8 = 1;
 pub const EXIT_USAGE: u8 = 2;
 /// Exit code: the link ended (end of stream, a read or write error, a serial hang-up).
 pub const EXIT_LINK_LOST: u8 = 3;
+
+/// How long the bridge goes on after a lifecycle `shutdown` before it ends: the answer to the
+/// request travels on a reliable writer that ends with the node.
+pub const FINALIZED_LINGER: Duration = Duration::from_millis(500);
 
 /// Examples of refused frames kept in the report (the counts by kind cover all of them).
 pub const REFUSED_EXAMPLES: usize = 8;
@@ -79,6 +85,15 @@ pub struct BridgeArgs {
     /// transform_tolerance, max_particles, alpha1–4, initial pose); the rest are listed.
     #[arg(long, value_name = "FILE")]
     pub params: Option<PathBuf>,
+    /// The node's namespace (nav2's multi-robot launch: `robot1`): the node is `NS/amcl`, its
+    /// topics and services `NS/amcl_pose` and so on (`/tf` stays `/tf`), and the params file's
+    /// section for `NS/amcl` is read.
+    #[arg(long, value_name = "NS", default_value = "/")]
+    pub namespace: String,
+    /// Start unconfigured and publish only once activated through the lifecycle services
+    /// (`amcl/change_state`: nav2's lifecycle manager). Without it the node starts active.
+    #[arg(long)]
+    pub lifecycle: bool,
     /// The DDS domain (ROS_DOMAIN_ID).
     #[arg(long, env = "ROS_DOMAIN_ID", default_value_t = 0)]
     pub domain_id: u16,
@@ -101,14 +116,28 @@ pub struct BridgeArgs {
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct BridgeReport {
     pub link: String,
+    /// The node's fully qualified name (`/amcl`, `/robot1/amcl`).
+    pub node: String,
+    /// nav2_amcl's parameters applied as nav2_amcl applies them.
     pub applied: BTreeMap<String, String>,
+    /// nav2_amcl's parameters applied in another form, and how.
+    pub adapted: BTreeMap<String, String>,
+    /// Parameters not applied, and why (unknown names included).
     pub ignored: BTreeMap<String, String>,
     /// Estimates published on `amcl_pose`.
     pub poses: u64,
-    /// Transforms published on `/tf`.
+    /// Transforms published on `/tf` (for estimates and re-sent).
     pub transforms: u64,
+    /// Transforms re-sent while no estimate came ([`crate::repeat`]), offered to `/tf`.
+    pub transforms_repeated: u64,
     /// Estimates not published: the filter was not initialized.
     pub uninitialized: u64,
+    /// Estimates not published: the node was not active (`--lifecycle`).
+    pub not_active: u64,
+    /// Lifecycle transitions made on request, in order (`unconfigured -> inactive`).
+    pub lifecycle_transitions: Vec<String>,
+    /// The lifecycle state at the end.
+    pub lifecycle_state: String,
     pub heartbeats: u64,
     /// Frames the decoder refused (CRC, length, range …) and messages the bridge does not
     /// take, counted by kind.
@@ -204,8 +233,19 @@ impl std::fmt::Display for BridgeReport {
         )?;
         writeln!(
             f,
-            "published: {} poses on amcl_pose, {} transforms on /tf ({} estimates before initialization not published)",
-            self.poses, self.transforms, self.uninitialized
+            "published: {} poses on amcl_pose, {} transforms on /tf ({} of them re-sent between estimates; {} estimates before initialization not published)",
+            self.poses, self.transforms, self.transforms_repeated, self.uninitialized
+        )?;
+        writeln!(
+            f,
+            "lifecycle: {} at the end, {} estimates while not active; transitions: {}",
+            self.lifecycle_state,
+            self.not_active,
+            if self.lifecycle_transitions.is_empty() {
+                "none".to_owned()
+            } else {
+                self.lifecycle_transitions.join(", ")
+            }
         )?;
         writeln!(
             f,
@@ -268,6 +308,9 @@ impl std::fmt::Display for BridgeReport {
         for (k, v) in &self.applied {
             writeln!(f, "applied {k}: {v}")?;
         }
+        for (k, v) in &self.adapted {
+            writeln!(f, "adapted {k}: {v}")?;
+        }
         for (k, v) in &self.ignored {
             writeln!(f, "ignored {k}: {v}")?;
         }
@@ -318,6 +361,13 @@ fn device_time(device_us: u64) -> Time {
     Time::from_nanos(device_us.saturating_mul(1000))
 }
 
+/// The instant a frame that arrived at `arrival_ns` (ns since the Unix epoch, [`now_ns`])
+/// arrived: now less the time since (now, for an arrival stamped in the future).
+fn arrived(arrival_ns: u64) -> Instant {
+    let ago = Duration::from_nanos(now_ns().saturating_sub(arrival_ns));
+    Instant::now().checked_sub(ago).unwrap_or_else(Instant::now)
+}
+
 /// `transform_tolerance`, seconds, in ns (saturating: more than u64 holds is `u64::MAX`).
 fn tolerance_ns(s: f64) -> u64 {
     Duration::try_from_secs_f64(s).map_or(if s > 0.0 { u64::MAX } else { 0 }, |d| {
@@ -328,6 +378,23 @@ fn tolerance_ns(s: f64) -> u64 {
 /// The transform's stamp: the pose's plus the tolerance, saturating at [`Time::MAX`].
 fn post_dated(stamp: Time, tolerance_ns: u64) -> Time {
     Time::from_nanos(stamp.to_nanos().unwrap_or(0).saturating_add(tolerance_ns))
+}
+
+/// `--namespace`: an absolute ROS namespace (`/`, `/robot1`, `/a/b`); a relative one is taken
+/// from the root, a trailing `/` dropped. Each level must be a ROS name (letters, digits and
+/// `_`, not starting with a digit).
+fn normalized_namespace(ns: &str) -> Result<String, BridgeError> {
+    let levels: Vec<&str> = ns.split('/').filter(|l| !l.is_empty()).collect();
+    for l in &levels {
+        let ok = l.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            && !l.starts_with(|c: char| c.is_ascii_digit());
+        if !ok {
+            return Err(BridgeError::Usage(format!(
+                "--namespace {ns:?}: {l:?} is not a ROS name (letters, digits, _)"
+            )));
+        }
+    }
+    Ok(format!("/{}", levels.join("/")))
 }
 
 /// Runs the bridge until the link ends or `args.seconds` pass; progress lines on stderr. An
@@ -357,15 +424,17 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let limit = args
         .seconds
         .and_then(|s| Duration::try_from_secs_f64(s).ok());
+    let namespace = normalized_namespace(&args.namespace)?;
+    let node_name = format!("{}/amcl", namespace.trim_end_matches('/'));
     let params = match &args.params {
-        Some(p) => Nav2Params::read(p).map_err(BridgeError::Params)?,
+        Some(p) => Nav2Params::read_for(p, &node_name).map_err(BridgeError::Params)?,
         None => Nav2Params::default(),
     };
     let frames = params.frames.clone();
     let node_config = NodeConfig {
         domain_id: args.domain_id,
         name: "amcl".into(),
-        namespace: "/".into(),
+        namespace,
         loopback_only: args.loopback_only,
         service_mapping: match args.rmw {
             Rmw::Fastrtps => ServiceMapping::Enhanced,
@@ -376,12 +445,14 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let mut port = Port::open(&endpoint).map_err(BridgeError::Port)?;
     let mut r = BridgeReport {
         link: endpoint.to_string(),
+        node: node_name.clone(),
         applied: params.applied.clone(),
+        adapted: params.adapted.clone(),
         ignored: params.ignored.clone(),
         ..BridgeReport::default()
     };
     eprintln!(
-        "bridge: connected to {endpoint}; node /amcl on domain {}",
+        "bridge: connected to {endpoint}; node {node_name} on domain {}",
         args.domain_id
     );
     if let Some(sp) = params.set_parameters {
@@ -400,6 +471,13 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     let tolerance_ns = tolerance_ns(frames.transform_tolerance_s);
     let mut poses: Outbox<crate::msg::PoseWithCovarianceStamped> = Outbox::default();
     let mut transforms: Outbox<TfMessage> = Outbox::default();
+    let mut repeater = Repeater::new();
+    let mut finalized_at: Option<Instant> = None;
+    let mut state = if args.lifecycle {
+        LifecycleState::Unconfigured
+    } else {
+        LifecycleState::Active
+    };
     let started = Instant::now();
     let mut progress = Instant::now();
     let count = |m: &mut BTreeMap<String, u64>, k: String| *m.entry(k).or_default() += 1;
@@ -428,8 +506,15 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                     arrival_ns,
                 } => match message {
                     Message::Estimate(e) => {
+                        let at = arrived(arrival_ns);
+                        repeater.alive(at);
                         if !e.flags.contains(EstimateFlags::INITIALIZED) {
                             r.uninitialized += 1;
+                            repeater.forget();
+                            continue;
+                        }
+                        if state != LifecycleState::Active {
+                            r.not_active += 1;
                             continue;
                         }
                         let stamp = match &mut clock {
@@ -454,6 +539,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                                 &frames.global,
                                 &frames.odom,
                             );
+                            repeater.sent(&t, at, Instant::now());
                             transforms
                                 .offer(
                                     TfMessage {
@@ -466,6 +552,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                         }
                     }
                     Message::Heartbeat(h) => {
+                        repeater.alive(arrived(arrival_ns));
                         r.heartbeats += 1;
                         r.last_heartbeat = Some(h.into());
                     }
@@ -495,6 +582,38 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                     r.exit_code = EXIT_LINK_LOST;
                     break 'run;
                 }
+            }
+        }
+        for c in node.lifecycle_calls(&mut state) {
+            match c {
+                Ok(c) => {
+                    eprintln!("bridge: lifecycle {} -> {}", c.from.label(), c.to.label());
+                    r.lifecycle_transitions
+                        .push(format!("{} -> {}", c.from.label(), c.to.label()));
+                }
+                Err(e) => eprintln!("bridge: {e}"),
+            }
+        }
+        if state == LifecycleState::Finalized {
+            // The shutdown's answer must reach its caller before the node goes.
+            let at = *finalized_at.get_or_insert_with(Instant::now);
+            if at.elapsed() >= FINALIZED_LINGER {
+                r.ended = "the node was shut down through its lifecycle".into();
+                r.exit_code = EXIT_STOPPED;
+                break;
+            }
+        }
+        if frames.tf_broadcast && state == LifecycleState::Active {
+            if let Some(t) = repeater.due(Instant::now()) {
+                transforms
+                    .offer(
+                        TfMessage {
+                            transforms: vec![t],
+                        },
+                        Instant::now(),
+                        |m| node.publish_tf(m),
+                    )
+                    .unwrap_or_else(ros_failed);
             }
         }
         for m in node.initial_poses() {
@@ -573,6 +692,8 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     );
     r.poses = poses.counters.published;
     r.transforms = transforms.counters.published;
+    r.transforms_repeated = repeater.repeated;
+    r.lifecycle_state = state.label().into();
     r.amcl_pose_outbox = poses.counters;
     r.tf_outbox = transforms.counters;
     if let Stamper::Host(c) = &clock {
@@ -615,6 +736,25 @@ mod tests {
         assert_eq!(parse_seconds("inf"), Ok(f64::INFINITY));
         assert_eq!(parse_seconds("1e30"), Ok(1e30));
         assert!(Duration::try_from_secs_f64(1e30).is_err());
+    }
+
+    #[test]
+    fn namespaces_are_absolute_ros_names() {
+        for (given, want) in [
+            ("/", "/"),
+            ("", "/"),
+            ("robot1", "/robot1"),
+            ("/robot1/", "/robot1"),
+            ("/a/b", "/a/b"),
+        ] {
+            assert_eq!(normalized_namespace(given).unwrap(), want, "{given}");
+        }
+        for bad in ["/robot-1", "1robot", "/a/b c", "/ä"] {
+            assert!(
+                matches!(normalized_namespace(bad), Err(BridgeError::Usage(_))),
+                "{bad}"
+            );
+        }
     }
 
     #[test]

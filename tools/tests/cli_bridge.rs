@@ -172,3 +172,52 @@ fn a_huge_transform_tolerance_saturates() {
     let r = report(&out);
     assert_eq!(r["transforms"], 4, "{r}");
 }
+
+#[test]
+fn a_namespaced_params_file_needs_the_namespace_and_a_bad_namespace_is_a_usage_error() {
+    let dir = std::env::temp_dir().join(format!("beamfield-bridge-ns-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let params = dir.join("params.yaml");
+    std::fs::write(
+        &params,
+        "robot1:\n  amcl:\n    ros__parameters:\n      transform_tolerance: 0.25\n",
+    )
+    .unwrap();
+    let params = params.to_str().unwrap();
+
+    // For the node /amcl the file has no section: it says which it has.
+    let (addr, _dev) = device(0, Duration::ZERO);
+    let out = bridge(&addr, 76, &["--params", params]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(code(&out), Some(1), "{err}");
+    assert!(
+        err.contains("/robot1/amcl") && err.contains("--namespace"),
+        "{err}"
+    );
+
+    // In the namespace it is read.
+    let (addr, dev) = device(3, Duration::ZERO);
+    let out = bridge(&addr, 76, &["--params", params, "--namespace", "robot1"]);
+    dev.join().unwrap();
+    assert_eq!(
+        code(&out),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = report(&out);
+    assert_eq!(r["node"], "/robot1/amcl", "{r}");
+    assert_eq!(r["applied"]["transform_tolerance"], "0.25 s", "{r}");
+    assert_eq!(r["poses"], 3, "{r}");
+
+    // Not a ROS name.
+    let (addr, _dev) = device(0, Duration::ZERO);
+    let out = bridge(&addr, 76, &["--params", params, "--namespace", "robot-1"]);
+    assert_eq!(
+        code(&out),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
