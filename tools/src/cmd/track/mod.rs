@@ -173,7 +173,7 @@ pub struct TrackArgs {
     /// The likelihood's σ_hit follows the cloud's spread, "GAIN,MAX": before each update
     /// σ² = σ_hit² + GAIN · (var x + var y) / 2 of the predicted particles, at most MAX metres
     /// (off by default).
-    #[arg(long, value_name = "GAIN,MAX")]
+    #[arg(long, value_name = "GAIN,MAX", allow_hyphen_values = true)]
     pub adaptive_sigma: Option<String>,
     /// Tempering κ while the quality signal does not report Tracking (default: --kappa always).
     #[arg(long, value_name = "K")]
