@@ -42,7 +42,7 @@
 //!    stamped with the revolution's time, so a pose is never sent twice or late under a new time.
 //! 4. **Time**: the device hands [`Robot::tick`] its own monotonic clock (a timer, not the
 //!    LiDAR). A heartbeat goes out every [`RobotConfig::heartbeat_period_us`] of it, whatever
-//!    the LiDAR sends, and once no LiDAR frame has passed its checksum for
+//!    the LiDAR sends, and once no valid LiDAR frame has come for
 //!    [`RobotConfig::lidar_silence_us`] (noise, a wrong baud rate, a silent line) the LiDAR is
 //!    taken as silent and the link is read whatever the odometry window holds.
 //!
@@ -145,7 +145,7 @@ pub struct RobotConfig {
     /// go out whatever the LiDAR sends (good data, noise, nothing). 0: none from
     /// [`Robot::tick`].
     pub heartbeat_period_us: u64,
-    /// The LiDAR is taken as silent once no LiDAR frame has passed its checksum for this long
+    /// The LiDAR is taken as silent once no valid LiDAR frame has come for this long
     /// on the board's clock (the time handed to [`Robot::tick`]), µs: noise and silence alike.
     /// While it is, the link is read whatever the odometry window holds
     /// ([`Robot::set_lidar_silent`]). 0: [`Robot::tick`] leaves it to the caller.
@@ -371,10 +371,12 @@ pub struct Robot<'a, const N: usize, const S: usize> {
     board_us: Option<u64>,
     /// When the next heartbeat is due on the board's clock, µs.
     heartbeat_due_us: Option<u64>,
-    /// The board's time at the last tick that saw a new valid LiDAR frame (or the first), µs,
-    /// and the decoder's count of valid frames then.
+    /// Points decoded from valid LiDAR frames (wrapping).
+    lidar_points: u32,
+    /// The board's time at the last tick that saw a new LiDAR point (or the first), µs, and
+    /// `lidar_points` then.
     lidar_seen_us: u64,
-    lidar_frames_seen: u32,
+    lidar_points_seen: u32,
     /// The LD06 stamp of the last point decoded, and whether the clock took it.
     last_stamp_ms: Option<u16>,
     stamp_taken: bool,
@@ -456,8 +458,9 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             lidar_silent: false,
             board_us: None,
             heartbeat_due_us: None,
+            lidar_points: 0,
             lidar_seen_us: 0,
-            lidar_frames_seen: 0,
+            lidar_points_seen: 0,
             last_stamp_ms: None,
             stamp_taken: true,
             deskewer,
@@ -558,9 +561,9 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     ///   passed since the last one (the first one period after the first tick), whatever the
     ///   LiDAR sends; returns whether it did. A caller that ticks late gets one heartbeat, not
     ///   a burst.
-    /// - Takes the LiDAR as silent ([`Robot::set_lidar_silent`]) once no LiDAR frame has passed
-    ///   its checksum for [`RobotConfig::lidar_silence_us`], and as back at the next one (with
-    ///   0 it leaves that to the caller).
+    /// - Takes the LiDAR as silent ([`Robot::set_lidar_silent`]) once no valid LiDAR frame (one
+    ///   whose points the decoder emitted) has come for [`RobotConfig::lidar_silence_us`], and
+    ///   as back at the next one (with 0 it leaves that to the caller).
     ///
     /// Without ticks the application sends no heartbeat of its own and the LiDAR is silent
     /// only when the caller says so: a host that replays recorded bytes leaves it out.
@@ -568,10 +571,10 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         let now = self.board_us.map_or(now_us, |b| b.max(now_us));
         let first = self.board_us.is_none();
         self.board_us = Some(now);
-        let frames = self.lidar.stats().frames_ok;
-        if first || frames != self.lidar_frames_seen {
+        // The application's own wrapping count (the decoder's counters saturate).
+        if first || self.lidar_points != self.lidar_points_seen {
             self.lidar_seen_us = now;
-            self.lidar_frames_seen = frames;
+            self.lidar_points_seen = self.lidar_points;
         }
         let quiet = self.config.lidar_silence_us;
         if quiet > 0 {
@@ -651,6 +654,11 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         self.lidar_silent = silent;
     }
 
+    /// Whether the LiDAR is taken as silent ([`Robot::tick`], [`Robot::set_lidar_silent`]).
+    pub fn is_lidar_silent(&self) -> bool {
+        self.lidar_silent
+    }
+
     /// Counts `n` bytes or messages lost before they reached the application (a receive ring
     /// that was full, a UART overrun); they are reported in the heartbeats' drops.
     pub fn add_drops(&mut self, n: u32) {
@@ -711,14 +719,17 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     }
 
     fn push_lidar_byte(&mut self, byte: u8) {
-        let (assembler, clock, last_stamp, stamp_taken) = (
+        let (assembler, clock, last_stamp, stamp_taken, points) = (
             &mut self.assembler,
             &mut self.clock,
             &mut self.last_stamp_ms,
             &mut self.stamp_taken,
+            &mut self.lidar_points,
         );
         let mut done: Option<Revolution<S>> = None;
         self.lidar.push_byte(byte, &mut |point| {
+            // Every point comes from a frame that passed its checks: the LiDAR is not silent.
+            *points = points.wrapping_add(1);
             // The clock moves once per frame (its points share the stamp). The points of a frame
             // whose stamp it did not take (a wrong stamp, or the first frame after a silence)
             // are dropped: the assembler would read the stamp as turns gone by.

@@ -417,13 +417,15 @@ fn noise(n: usize, seed: u64) -> Vec<u8> {
 /// link bytes that arrived during it) as the firmware's main loop does: polls until idle with
 /// the step's bytes, then ticks the board's clock. Every byte must be read in the step it arrived
 /// in (the link at its pace whatever the LiDAR does). Returns the heartbeats with the board time
-/// each was sent at and the LiDAR bytes handed over by then.
+/// each was sent at and the LiDAR bytes handed over by then, and the board times of the steps
+/// after which the LiDAR was taken as silent.
 fn run_clocked<const N: usize>(
     robot: &mut Robot<'_, N, BEAMS>,
     steps: impl IntoIterator<Item = (u64, Vec<u8>, Vec<u8>)>,
     sink: &mut Collect,
-) -> Vec<(u64, u64, Heartbeat)> {
+) -> (Vec<(u64, u64, Heartbeat)>, Vec<u64>) {
     let mut beats = Vec::new();
+    let mut silent = Vec::new();
     let mut lidar_total = 0u64;
     for (now_us, lidar, link) in steps {
         let (mut ls, mut ks) = (SliceSource::new(&lidar), SliceSource::new(&link));
@@ -451,8 +453,24 @@ fn run_clocked<const N: usize>(
             .collect();
         assert_eq!(sent, !new.is_empty());
         beats.extend(new.into_iter().map(|h| (now_us, lidar_total, h)));
+        if robot.is_lidar_silent() {
+            silent.push(now_us);
+        }
     }
-    beats
+    (beats, silent)
+}
+
+/// The LiDAR taken as silent at every step from 1 s (`lidar_silence_us`) after the first tick at
+/// 10 ms to the end at `until_us`, steps of 10 ms.
+fn assert_silent_after_1_s(silent: &[u64], until_us: u64) {
+    let want: Vec<u64> = (1_010_000..=until_us).step_by(10_000).collect();
+    assert!(
+        silent == want,
+        "silent from {:?} to {:?} µs, {} steps",
+        silent.first(),
+        silent.last(),
+        silent.len()
+    );
 }
 
 /// The LD06's line at 230,400 baud (8N1): bytes that arrive in 10 ms.
@@ -482,9 +500,10 @@ fn heartbeats_keep_coming_while_the_lidar_sends_noise_and_count_its_bytes() {
     // 8 s of noise at the line's rate.
     let steps =
         (1..=800u64).map(|k| (k * 10_000, noise(LINE_BYTES_PER_10_MS, k), Vec::<u8>::new()));
-    let beats = run_clocked(&mut robot, steps, &mut sink);
+    let (beats, silent) = run_clocked(&mut robot, steps, &mut sink);
     assert_periodic(&beats, 8_000_000);
     assert!(beats.len() >= 7, "{}", beats.len());
+    assert_silent_after_1_s(&silent, 8_000_000);
     // Every noise byte handed over by then is in the heartbeat's count of skipped bytes.
     for (t, fed, h) in &beats {
         assert_eq!(u64::from(h.lidar_skipped), *fed, "at {t} µs");
@@ -508,9 +527,10 @@ fn heartbeats_keep_coming_while_the_lidar_is_silent() {
         Robot::<CAP, BEAMS>::new(&mut store, view, None, layout(), config(), None).unwrap();
     let mut sink = Collect::default();
     let steps = (1..=800u64).map(|k| (k * 10_000, Vec::new(), Vec::new()));
-    let beats = run_clocked(&mut robot, steps, &mut sink);
+    let (beats, silent) = run_clocked(&mut robot, steps, &mut sink);
     assert_periodic(&beats, 8_000_000);
     assert!(beats.len() >= 7, "{}", beats.len());
+    assert_silent_after_1_s(&silent, 8_000_000);
 }
 
 #[test]
@@ -543,9 +563,11 @@ fn heartbeats_keep_their_period_while_the_lidar_sends_good_data() {
             .collect();
         (k * 10_000, lidar, link)
     });
-    let beats = run_clocked(&mut robot, steps, &mut sink);
+    let (beats, silent) = run_clocked(&mut robot, steps, &mut sink);
     assert_periodic(&beats, 4_100_000);
     assert_eq!(beats.len(), 4);
+    // Good frames all along: never silent (the last one ends at 4 s; 100 ms later is not 1 s).
+    assert_eq!(silent, []);
     assert_eq!(estimates(&sink).len(), 39);
     for (_, _, h) in &beats {
         assert_eq!(h.lidar_skipped, 0);
@@ -597,7 +619,7 @@ fn the_link_is_read_at_its_pace_while_the_lidar_sends_noise_or_nothing() {
             (k * 10_000 + 1, lidar, bytes)
         });
         // `run_clocked` checks that every link byte is read in the step it arrives in.
-        let beats = run_clocked(&mut robot, steps, &mut sink);
+        let (beats, _) = run_clocked(&mut robot, steps, &mut sink);
         assert_periodic(&beats, 4_000_001);
         let counters = robot.counters();
         assert_eq!(counters.odometry, link.len() as u32, "{counters:?}");
