@@ -208,6 +208,14 @@ pub struct HeartbeatCounters {
     pub updates: u32,
     pub drops: u32,
     pub link_errors: u32,
+    /// LiDAR bytes the device's decoder skipped (noise, a wrong baud rate).
+    pub lidar_skipped: u32,
+    /// Frames the device could not encode (never sent).
+    pub encode_failures: u32,
+    /// Frames the device refused after their CRC passed.
+    pub refused: u32,
+    /// The device's own clock, ms since it started (wrapping).
+    pub uptime_ms: u32,
 }
 
 impl From<Heartbeat> for HeartbeatCounters {
@@ -220,8 +228,24 @@ impl From<Heartbeat> for HeartbeatCounters {
             updates: h.updates,
             drops: h.drops,
             link_errors: h.link_errors,
+            lidar_skipped: h.lidar_skipped,
+            encode_failures: h.encode_failures,
+            refused: h.refused,
+            uptime_ms: h.uptime_ms,
         }
     }
+}
+
+/// What to tell the user when the device's LiDAR sends bytes its decoder skips and no scan
+/// between two heartbeats (noise: a wrong baud rate, a loose wire); `None` otherwise.
+fn lidar_noise(last: Option<&HeartbeatCounters>, now: &Heartbeat) -> Option<String> {
+    let last = last?;
+    let skipped = now.lidar_skipped.wrapping_sub(last.lidar_skipped);
+    (skipped > 0 && now.scans == last.scans).then(|| {
+        format!(
+            "the device's LiDAR sent {skipped} bytes its decoder skipped and no scan since the last heartbeat (a wrong baud rate or a noisy line?)"
+        )
+    })
 }
 
 impl std::fmt::Display for BridgeReport {
@@ -297,12 +321,16 @@ impl std::fmt::Display for BridgeReport {
         if let Some(h) = &self.last_heartbeat {
             writeln!(
                 f,
-                "last heartbeat at {:.3} s: {} scans, {} updates, {} drops, {} link errors",
+                "last heartbeat at {:.3} s (device up {:.3} s): {} scans, {} updates, {} drops, {} link errors ({} refused), {} LiDAR bytes skipped, {} frames not encodable",
                 h.timestamp_us as f64 * 1e-6,
+                f64::from(h.uptime_ms) * 1e-3,
                 h.scans,
                 h.updates,
                 h.drops,
-                h.link_errors
+                h.link_errors,
+                h.refused,
+                h.lidar_skipped,
+                h.encode_failures
             )?;
         }
         for (k, v) in &self.applied {
@@ -554,6 +582,9 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                     Message::Heartbeat(h) => {
                         repeater.alive(arrived(arrival_ns));
                         r.heartbeats += 1;
+                        if let Some(note) = lidar_noise(r.last_heartbeat.as_ref(), &h) {
+                            eprintln!("bridge: {note}");
+                        }
                         r.last_heartbeat = Some(h.into());
                     }
                     Message::Error(e) => {
@@ -798,5 +829,21 @@ mod tests {
         assert_eq!(r.link_refused["BadCrc"], 1);
         assert_eq!(r.link_refused_examples.len(), REFUSED_EXAMPLES);
         assert!(r.link_refused_examples[7].contains("seq: 7"));
+    }
+
+    #[test]
+    fn a_lidar_that_sends_only_skipped_bytes_is_reported() {
+        let beat = |scans, lidar_skipped| Heartbeat {
+            scans,
+            lidar_skipped,
+            ..Heartbeat::default()
+        };
+        let last = HeartbeatCounters::from(beat(10, 100));
+        let noisy = lidar_noise(Some(&last), &beat(10, 23_140)).unwrap();
+        assert!(noisy.contains("23040 bytes"), "{noisy}");
+        // Scans came (a few bytes lost at a resync), nothing skipped, or no earlier heartbeat.
+        assert_eq!(lidar_noise(Some(&last), &beat(20, 150)), None);
+        assert_eq!(lidar_noise(Some(&last), &beat(10, 100)), None);
+        assert_eq!(lidar_noise(None, &beat(10, 23_140)), None);
     }
 }

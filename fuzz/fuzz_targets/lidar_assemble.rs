@@ -32,6 +32,7 @@ fuzz_target!(|data: &[u8]| {
         max_range_m: 10.0,
         min_quality: u16::from(data[4] % 8),
         timestamp_wrap_ms: u16::from_le_bytes([data[5], data[6]]),
+        sensor_timestamps: data[3] % 2 == 0,
     };
     let Ok(mut asm) = ScanAssembler::new(&layout, cfg) else {
         return;

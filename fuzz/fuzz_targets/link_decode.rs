@@ -7,8 +7,8 @@
 //! - `0x00..=0x7F`: a frame. Bits 0–3 pick the type (0–8: the nine message types; 9–15: the
 //!   next byte as the type byte); bit 4 leaves the CRC as the next 4 bytes instead of the right
 //!   one; bit 5 takes the payload length from the next byte (mod 80) instead of the type's;
-//!   bit 6 takes the version byte from the next byte instead of 1. Then 2 bytes of sequence
-//!   number and the payload (zero-padded when the input runs out).
+//!   bit 6 takes the version byte from the next byte instead of `link::VERSION`. Then 2 bytes
+//!   of sequence number and the payload (zero-padded when the input runs out).
 //! - `0x80..=0xFF`: a raw run of `tag & 0x7F` bytes, appended as they are (zeros included).
 //!
 //! Checks: no panic; the counters add up (bytes fed, frames + errors = results); the decoder
@@ -19,7 +19,9 @@
 
 #![no_main]
 
-use beamfield::link::{crc32, encode, Decoder, MessageType, MAX_ENCODED_LEN, MAX_WIRE_LEN};
+use beamfield::link::{
+    crc32, encode, Decoder, MessageType, MAX_ENCODED_LEN, MAX_WIRE_LEN, VERSION,
+};
 use libfuzzer_sys::fuzz_target;
 
 const TYPES: [u8; 9] = [0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x81, 0x82, 0x83];
@@ -49,7 +51,7 @@ fn build(data: &[u8]) -> Vec<u8> {
         }
         let sel = usize::from(tag & 0x0F);
         let msg_type = TYPES.get(sel).copied().unwrap_or_else(|| input.or_zero());
-        let version = if tag & 0x40 != 0 { input.or_zero() } else { 1 };
+        let version = if tag & 0x40 != 0 { input.or_zero() } else { VERSION };
         let len = if tag & 0x20 != 0 {
             usize::from(input.or_zero() % 80)
         } else {

@@ -204,7 +204,7 @@ fuzz_target!(|data: &[u8]| {
     let layout = full_turn_layout::<BEAMS>(BEAMS, 8.0, SensorMount::CENTERED).expect("layout");
     let mut config = RobotConfig::new(8.0).expect("config");
     config.particles = CAP;
-    config.heartbeat_every = 3;
+    config.heartbeat_period_us = 300_000;
     let mut store = Particles::<CAP>::new();
     let Ok(mut robot) = Robot::<CAP, BEAMS>::new(&mut store, view, Some(free), layout, config, seed)
     else {
@@ -214,6 +214,7 @@ fuzz_target!(|data: &[u8]| {
     let (mut lidar_at, mut link_at) = (0usize, 0usize);
     let mut sink = Check;
     let mut polls = 0u32;
+    let mut board_us = 0u64;
     while let Some(tag) = input.byte() {
         match tag % 6 {
             0 => link_frame(&mut input, &mut link),
@@ -232,6 +233,9 @@ fuzz_target!(|data: &[u8]| {
                 for _ in 0..(b & 0x0F) {
                     let mut l = Chunk { bytes: &lidar, at: lidar_at, left: per_poll };
                     let mut k = Chunk { bytes: &link, at: link_at, left: per_poll };
+                    // The board's clock: 0 to 1.27 s per poll, heartbeats and silence with it.
+                    board_us += u64::from(b & 0x7F) * 10_000;
+                    robot.tick(board_us, &mut sink);
                     robot.poll(&mut l, &mut k, &mut sink);
                     lidar_at = l.at;
                     link_at = k.at;

@@ -20,7 +20,7 @@ import sys
 
 from cobs import cobs
 
-VERSION = 1
+VERSION = 2
 MAX_POSITION_M = 1.0e5
 # pi rounded to f32, as a double.
 MAX_THETA_RAD = struct.unpack("<f", struct.pack("<f", math.pi))[0]
@@ -36,7 +36,7 @@ LAYOUT = {
     0x05: ("request_no_motion_update", "<"),
     0x06: ("set_parameters", "<BHfffff"),
     0x81: ("estimate", "<Qfff9ffHBffff"),
-    0x82: ("heartbeat", "<Q8I"),
+    0x82: ("heartbeat", "<Q12I"),
     0x83: ("error", "<BBHB"),
 }
 
@@ -235,7 +235,7 @@ def encode_main(lines_path, out_path):
     bad("out_of_range", 0x03, 901, 24, encode_frame(0x03, 901, sip))
     far = struct.pack("<Qfff", 5, 1.0e6, 0.0, 0.0)
     bad("out_of_range", 0x01, 902, 8, encode_frame(0x01, 902, far))
-    bad("wrong_version", 0x01, 903, 0, encode_frame(0x01, 903, pose, version=2))
+    bad("wrong_version", 0x01, 903, 0, encode_frame(0x01, 903, pose, version=VERSION + 1))
     bad("unknown_type", 0x7E, 904, 0, encode_frame(0x7E, 904, b""))
     bad("wrong_length", 0x02, 905, 0, encode_frame(0x02, 905, b"\1" * 15))
     est = struct.pack("<Qfff9ffHBffff", 1, 0.0, 0.0, 0.0, *cov, 10.0, 0x40, 0, 0.0, 0.0, 0.0, 0.0)

@@ -101,7 +101,7 @@ fn message() -> impl Strategy<Value = Message> {
                     })
                 }
             ),
-        (any::<u64>(), prop::array::uniform8(any::<u32>())).prop_map(|(t, c)| {
+        (any::<u64>(), prop::array::uniform12(any::<u32>())).prop_map(|(t, c)| {
             Message::Heartbeat(Heartbeat {
                 timestamp_us: t,
                 bytes: c[0],
@@ -112,6 +112,10 @@ fn message() -> impl Strategy<Value = Message> {
                 odometry: c[5],
                 drops: c[6],
                 link_errors: c[7],
+                lidar_skipped: c[8],
+                encode_failures: c[9],
+                refused: c[10],
+                uptime_ms: c[11],
             })
         }),
         (code, any::<u8>(), any::<u16>(), any::<u8>()).prop_map(|(code, msg_type, seq, detail)| {
@@ -254,6 +258,10 @@ fn line(seq: u16, m: &Message) -> String {
             h.odometry.into(),
             h.drops.into(),
             h.link_errors.into(),
+            h.lidar_skipped.into(),
+            h.encode_failures.into(),
+            h.refused.into(),
+            h.uptime_ms.into(),
         ]
         .iter()
         .map(u64::to_string)

@@ -259,6 +259,17 @@ pub struct Heartbeat {
     pub drops: u32,
     /// Frames received and refused, all causes (the CRC failures included).
     pub link_errors: u32,
+    /// LiDAR bytes the decoder skipped while searching for a frame header (noise, a wrong baud
+    /// rate, the rest of a frame whose checksum failed).
+    pub lidar_skipped: u32,
+    /// Frames (estimates, heartbeats, error reports) the device could not encode: never sent.
+    pub encode_failures: u32,
+    /// Frames refused after their CRC passed (commands and odometry): an error report went
+    /// out for each. Also counted in [`Heartbeat::link_errors`].
+    pub refused: u32,
+    /// Milliseconds since the device started on its own monotonic clock (not the LiDAR's:
+    /// it advances whatever the LiDAR sends), wrapping at 2³²; 0 from a device that keeps none.
+    pub uptime_ms: u32,
 }
 
 impl Heartbeat {
@@ -273,6 +284,10 @@ impl Heartbeat {
             odometry: wire::u32_at(p, hb::ODOMETRY),
             drops: wire::u32_at(p, hb::DROPS),
             link_errors: wire::u32_at(p, hb::LINK_ERRORS),
+            lidar_skipped: wire::u32_at(p, hb::LIDAR_SKIPPED),
+            encode_failures: wire::u32_at(p, hb::ENCODE_FAILURES),
+            refused: wire::u32_at(p, hb::REFUSED),
+            uptime_ms: wire::u32_at(p, hb::UPTIME_MS),
         }
     }
 
@@ -286,6 +301,10 @@ impl Heartbeat {
         wire::put_u32(p, hb::ODOMETRY, self.odometry);
         wire::put_u32(p, hb::DROPS, self.drops);
         wire::put_u32(p, hb::LINK_ERRORS, self.link_errors);
+        wire::put_u32(p, hb::LIDAR_SKIPPED, self.lidar_skipped);
+        wire::put_u32(p, hb::ENCODE_FAILURES, self.encode_failures);
+        wire::put_u32(p, hb::REFUSED, self.refused);
+        wire::put_u32(p, hb::UPTIME_MS, self.uptime_ms);
     }
 }
 

@@ -139,8 +139,17 @@ pub mod heartbeat {
     pub const DROPS: Field = 32..36;
     /// Frames received and refused, all causes (CRC failures included).
     pub const LINK_ERRORS: Field = 36..40;
+    /// LiDAR bytes the decoder skipped while searching for a frame header (noise, a wrong baud
+    /// rate, the rest of a frame whose checksum failed).
+    pub const LIDAR_SKIPPED: Field = 40..44;
+    /// Frames the device could not encode (never sent).
+    pub const ENCODE_FAILURES: Field = 44..48;
+    /// Frames refused after their CRC passed (an `Error` went out for each).
+    pub const REFUSED: Field = 48..52;
+    /// `u32`, ms since the device started, on its own monotonic clock (not the LiDAR's).
+    pub const UPTIME_MS: Field = 52..56;
     /// Payload length.
-    pub const LEN: usize = 40;
+    pub const LEN: usize = 56;
 }
 
 /// `Error` (type `0x83`).

@@ -62,7 +62,7 @@ pub use from_device::{
 pub use to_device::{SetInitialPose, SetParameters, WheelOdometry, WheelTicks};
 
 /// The protocol version this module speaks (byte 0 of every frame).
-pub const VERSION: u8 = 1;
+pub const VERSION: u8 = 2;
 /// The frame delimiter on the wire.
 pub const DELIMITER: u8 = 0x00;
 /// Longest payload (an [`Estimate`]), bytes.

@@ -57,6 +57,10 @@ fn samples() -> [Message; 9] {
             odometry: 5,
             drops: 6,
             link_errors: 7,
+            lidar_skipped: 8,
+            encode_failures: 9,
+            refused: 10,
+            uptime_ms: u32::MAX - 1,
         }),
         Message::Error(ErrorReport {
             code: ErrorCode::ValueOutOfRange,
@@ -108,7 +112,7 @@ fn stream(bytes: &[u8]) -> (Vec<Result<Frame, LinkError>>, LinkStats) {
 #[test]
 fn every_message_round_trips_at_its_size() {
     // Payload sizes of docs/link-protocol.md.
-    let sizes = [20, 16, 56, 0, 0, 23, 79, 40, 5];
+    let sizes = [20, 16, 56, 0, 0, 23, 79, 56, 5];
     for (m, size) in samples().iter().zip(sizes) {
         assert_eq!(m.message_type().payload_len(), size, "{m:?}");
         for seq in [0, 1, 0x00FF, 0xFFFF] {
@@ -142,14 +146,14 @@ fn the_worked_example_of_the_protocol_document() {
     let hex: String = encoded(7, &m).iter().map(|b| format!("{b:02x}")).collect();
     assert_eq!(
         hex,
-        // COBS code 04 and 01 02 07; code 04 and 40 42 0f; four zeros (codes 01); code 03
-        // and b0 04; code 01; code 09 and dd ff ff ff and the CRC 0x1386915c; the delimiter.
-        "04010207".to_string()
+        // COBS code 04 and 02 02 07; code 04 and 40 42 0f; four zeros (codes 01); code 03
+        // and b0 04; code 01; code 09 and dd ff ff ff and the CRC 0xbc2fdc96; the delimiter.
+        "04020207".to_string()
             + "0440420f"
             + "01010101"
             + "03b004"
             + "01"
-            + "09ddffffff5c918613"
+            + "09ddffffff96dc2fbc"
             + "00",
         "{hex}"
     );
@@ -290,9 +294,9 @@ fn header_errors_keep_the_type_and_sequence_number() {
     let payload = payload_of(&samples()[0]);
     let one = |bytes: Vec<u8>| decode(&bytes[..bytes.len() - 1]);
     assert_eq!(
-        one(raw_frame(2, 0x01, 77, &payload)),
+        one(raw_frame(VERSION + 1, 0x01, 77, &payload)),
         Err(LinkError::WrongVersion {
-            version: 2,
+            version: VERSION + 1,
             msg_type: 1,
             seq: 77
         })

@@ -10,7 +10,7 @@
 //! 1. **Link** (odometry and commands, the protocol of [`crate::link`]): frames are decoded as
 //!    long as the odometry window ([`window::WINDOW`] samples) and the command queue
 //!    ([`COMMANDS`]) have room — a sender that runs ahead of the LiDAR is held back. While the
-//!    caller says the LiDAR is silent ([`Robot::set_lidar_silent`], from the device's timer)
+//!    LiDAR is silent ([`Robot::tick`] or [`Robot::set_lidar_silent`], from the device's timer)
 //!    the link is read all the same, so that it never backs up: the
 //!    oldest odometry is dropped to make room (counted in [`RobotCounters::odometry_dropped`]
 //!    and the heartbeats' drops) and a command that finds the queue full is refused.
@@ -40,13 +40,17 @@
 //!    late. The filter predicts with the odometry step since the last update and updates with the
 //!    tempered likelihood field; an [`link::Estimate`] goes out for every update that succeeded,
 //!    stamped with the revolution's time, so a pose is never sent twice or late under a new time.
-//!    A heartbeat follows every [`RobotConfig::heartbeat_every`] revolutions.
+//! 4. **Time**: the device hands [`Robot::tick`] its own monotonic clock (a timer, not the
+//!    LiDAR). A heartbeat goes out every [`RobotConfig::heartbeat_period_us`] of it, whatever
+//!    the LiDAR sends, and once no valid LiDAR frame has come for
+//!    [`RobotConfig::lidar_silence_us`] (noise, a wrong baud rate, a silent line) the LiDAR is
+//!    taken as silent and the link is read whatever the odometry window holds.
 //!
 //! Nothing depends on how the bytes are split between calls, as long as the odometry that
 //! reaches a revolution's time arrives before the next revolution is complete, is stamped
-//! (not 0, "on arrival") and the LiDAR is not declared silent: the device's
-//! output is then a function of the two byte streams alone, which is what lets the host
-//! recompute it.
+//! (not 0, "on arrival") and the LiDAR is not declared silent: the device's estimates and
+//! error reports are then a function of the two byte streams alone, which is what lets the
+//! host recompute them. The heartbeats are not: they follow the device's clock.
 
 pub mod clock;
 mod io;
@@ -136,8 +140,16 @@ pub struct RobotConfig {
     pub update_min_d_m: f32,
     /// See [`RobotConfig::update_min_d_m`]: AMCL's `update_min_a`, rad.
     pub update_min_a_rad: f32,
-    /// A heartbeat after every this many revolutions (0: none from [`Robot::poll`]).
-    pub heartbeat_every: u32,
+    /// A heartbeat whenever this much time has passed since the last one on the board's own
+    /// monotonic clock (the time handed to [`Robot::tick`], not the LiDAR's), µs: heartbeats
+    /// go out whatever the LiDAR sends (good data, noise, nothing). 0: none from
+    /// [`Robot::tick`].
+    pub heartbeat_period_us: u64,
+    /// The LiDAR is taken as silent once no valid LiDAR frame has come for this long
+    /// on the board's clock (the time handed to [`Robot::tick`]), µs: noise and silence alike.
+    /// While it is, the link is read whatever the odometry window holds
+    /// ([`Robot::set_lidar_silent`]). 0: [`Robot::tick`] leaves it to the caller.
+    pub lidar_silence_us: u64,
     /// Seed of the filter's random generator.
     pub seed: u64,
     /// De-skew every revolution for the motion during it before the update
@@ -155,8 +167,9 @@ impl RobotConfig {
     /// noise α 0.02 (variance coefficients, AMCL's convention),
     /// resampling below half the particles, at most 2 m/s and 4 rad/s, 100 ms gaps, initial
     /// poses up to σ 100 m, odometry up to 10 s ahead of the device clock, a restart of the
-    /// odometry recognised after 1 s of silence, an update at every revolution and a heartbeat
-    /// every 10.
+    /// odometry recognised after 1 s of silence, an update at every revolution, a heartbeat
+    /// every second of the board's clock and the LiDAR taken as silent after 1 s without a
+    /// valid frame.
     ///
     /// # Errors
     /// [`Error::Motion`] if `max_range_m` is not finite (it checks nothing else: the checks are
@@ -182,7 +195,8 @@ impl RobotConfig {
             odometry_restart_gap_us: 1_000_000,
             update_min_d_m: 0.0,
             update_min_a_rad: 0.0,
-            heartbeat_every: 10,
+            heartbeat_period_us: 1_000_000,
+            lidar_silence_us: 1_000_000,
             seed: 1,
             deskew: false,
         })
@@ -355,6 +369,16 @@ pub struct Robot<'a, const N: usize, const S: usize> {
     /// The caller says the LiDAR is silent ([`Robot::set_lidar_silent`]): the link is read
     /// whatever the window holds.
     lidar_silent: bool,
+    /// The board's time at the last [`Robot::tick`], µs.
+    board_us: Option<u64>,
+    /// When the next heartbeat is due on the board's clock, µs.
+    heartbeat_due_us: Option<u64>,
+    /// Points decoded from valid LiDAR frames (wrapping).
+    lidar_points: u32,
+    /// The board's time at the last tick that saw a new LiDAR point (or the first), µs, and
+    /// `lidar_points` then.
+    lidar_seen_us: u64,
+    lidar_points_seen: u32,
     /// The LD06 stamp of the last point decoded, and whether the clock took it.
     last_stamp_ms: Option<u16>,
     stamp_taken: bool,
@@ -434,6 +458,11 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             processed_us: 0,
             counters: RobotCounters::default(),
             lidar_silent: false,
+            board_us: None,
+            heartbeat_due_us: None,
+            lidar_points: 0,
+            lidar_seen_us: 0,
+            lidar_points_seen: 0,
             last_stamp_ms: None,
             stamp_taken: true,
             deskewer,
@@ -525,18 +554,69 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
         progress
     }
 
-    /// Sends a heartbeat now (the application sends one every
-    /// [`RobotConfig::heartbeat_every`] revolutions; a device calls this on its own timer too,
-    /// so that a stalled sensor still shows up on the computer).
+    /// Tells the application the time on the board's own monotonic clock, `now_us` µs since
+    /// the device started (a timer: not the LiDAR's stamps; a time before the last one is taken
+    /// as the last one). Call it at every turn of the main loop, before or after
+    /// [`Robot::poll`]; it does a bounded amount of work.
     ///
-    /// Its timestamp is the time of the last revolution processed, and its scans and updates
-    /// count up to that revolution: those follow from the byte streams alone. The link counters
-    /// (bytes, frames, odometry, errors) count what was read so far, which depends on how far
-    /// ahead the sender is.
-    pub fn send_heartbeat(&mut self, sink: &mut impl Sink) {
+    /// - Sends a heartbeat ([`Robot::heartbeat`]) when [`RobotConfig::heartbeat_period_us`] has
+    ///   passed since the last one (the first one period after the first tick), whatever the
+    ///   LiDAR sends; returns whether it did. A caller that ticks late gets one heartbeat, not
+    ///   a burst.
+    /// - Takes the LiDAR as silent ([`Robot::set_lidar_silent`]) once no valid LiDAR frame (one
+    ///   whose points the decoder emitted) has come for [`RobotConfig::lidar_silence_us`], and
+    ///   as back at the next one (with 0 it leaves that to the caller).
+    ///
+    /// Without ticks the application sends no heartbeat of its own and the LiDAR is silent
+    /// only when the caller says so: a host that replays recorded bytes leaves it out.
+    pub fn tick(&mut self, now_us: u64, sink: &mut impl Sink) -> bool {
+        let now = self.board_us.map_or(now_us, |b| b.max(now_us));
+        let first = self.board_us.is_none();
+        self.board_us = Some(now);
+        // The application's own wrapping count (the decoder's counters saturate).
+        if first || self.lidar_points != self.lidar_points_seen {
+            self.lidar_seen_us = now;
+            self.lidar_points_seen = self.lidar_points;
+        }
+        let quiet = self.config.lidar_silence_us;
+        if quiet > 0 {
+            self.lidar_silent = now - self.lidar_seen_us >= quiet;
+        }
+        let period = self.config.heartbeat_period_us;
+        if period == 0 {
+            return false;
+        }
+        let due = *self
+            .heartbeat_due_us
+            .get_or_insert(now.saturating_add(period));
+        if now < due {
+            return false;
+        }
+        // Next one a period after this one was due; from now on if the caller fell further
+        // behind than a period.
+        let next = due.saturating_add(period);
+        self.heartbeat_due_us = Some(if next > now {
+            next
+        } else {
+            now.saturating_add(period)
+        });
+        self.send_heartbeat(sink);
+        true
+    }
+
+    /// The heartbeat [`Robot::send_heartbeat`] would send now.
+    ///
+    /// Its timestamp is the time of the last revolution processed on the device clock (the
+    /// LiDAR's, which odometry is stamped on; it stands still while the LiDAR sends nothing
+    /// usable), and its scans and updates count up to that revolution: those follow from the
+    /// byte streams alone. The link counters (bytes, frames, odometry, errors, refused) count
+    /// what was read so far, which depends on how far ahead the sender is; the LiDAR's skipped
+    /// bytes what was decoded so far; the uptime is the last [`Robot::tick`]'s time in ms
+    /// (wrapping; 0 before the first tick).
+    pub fn heartbeat(&self) -> Heartbeat {
         let d = self.lidar.stats();
         let l = self.link.stats();
-        let heartbeat = Heartbeat {
+        Heartbeat {
             timestamp_us: self.processed_us,
             bytes: l.bytes,
             frames: l.frames,
@@ -551,18 +631,34 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
                 .wrapping_add(self.counters.odometry_dropped)
                 .wrapping_add(d.bad_checksum),
             link_errors: l.errors().wrapping_add(self.counters.refused),
-        };
+            lidar_skipped: d.skipped_bytes,
+            encode_failures: self.counters.encode_failures,
+            refused: self.counters.refused,
+            // Wraps at 2^32 ms, as the protocol says.
+            uptime_ms: (self.board_us.unwrap_or(0) / 1000) as u32,
+        }
+    }
+
+    /// Sends [`Robot::heartbeat`] now ([`Robot::tick`] sends one every
+    /// [`RobotConfig::heartbeat_period_us`]; this one does not move its schedule).
+    pub fn send_heartbeat(&mut self, sink: &mut impl Sink) {
+        let heartbeat = self.heartbeat();
         self.send(&Message::Heartbeat(heartbeat), sink);
     }
 
-    /// Tells the application whether the LiDAR is silent: no revolution for longer than the
-    /// odometry window lasts (the device knows from its timer; the application keeps no time of
-    /// its own). While it is, [`Robot::poll`] reads the link whatever the odometry window and
+    /// Tells the application whether the LiDAR is silent ([`Robot::tick`] does, from the
+    /// board's clock and [`RobotConfig::lidar_silence_us`]; the next tick overrides this). While
+    /// it is, [`Robot::poll`] reads the link whatever the odometry window and
     /// the command queue hold, dropping the oldest odometry (counted in
     /// [`RobotCounters::odometry_dropped`]) and refusing commands beyond the queue, so that the
     /// link never backs up into the receive ring. Off at the start.
     pub fn set_lidar_silent(&mut self, silent: bool) {
         self.lidar_silent = silent;
+    }
+
+    /// Whether the LiDAR is taken as silent ([`Robot::tick`], [`Robot::set_lidar_silent`]).
+    pub fn is_lidar_silent(&self) -> bool {
+        self.lidar_silent
     }
 
     /// Counts `n` bytes or messages lost before they reached the application (a receive ring
@@ -625,14 +721,17 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
     }
 
     fn push_lidar_byte(&mut self, byte: u8) {
-        let (assembler, clock, last_stamp, stamp_taken) = (
+        let (assembler, clock, last_stamp, stamp_taken, points) = (
             &mut self.assembler,
             &mut self.clock,
             &mut self.last_stamp_ms,
             &mut self.stamp_taken,
+            &mut self.lidar_points,
         );
         let mut done: Option<Revolution<S>> = None;
         self.lidar.push_byte(byte, &mut |point| {
+            // Every point comes from a frame that passed its checks: the LiDAR is not silent.
+            *points = points.wrapping_add(1);
             // The clock moves once per frame (its points share the stamp). The points of a frame
             // whose stamp it did not take (a wrong stamp, or the first frame after a silence)
             // are dropped: the assembler would read the stamp as turns gone by.
@@ -1022,12 +1121,6 @@ impl<'a, const N: usize, const S: usize> Robot<'a, N, S> {
             }
         }
         self.window.forget_before(rev.t_us);
-        let every = self.config.heartbeat_every;
-        if every > 0 && self.counters.revolutions % every == 0 {
-            probe.enter(Stage::Send);
-            self.send_heartbeat(sink);
-            probe.leave(Stage::Send);
-        }
     }
 
     /// Predicts and updates with `rev`; the estimate to send, `None` when the revolution was

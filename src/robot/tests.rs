@@ -174,7 +174,6 @@ impl Sink for Collect {
 fn config() -> RobotConfig {
     let mut c = RobotConfig::new(8.0).unwrap();
     c.particles = 200;
-    c.heartbeat_every = 5;
     c
 }
 
@@ -265,12 +264,13 @@ fn tracks_the_path_and_sends_one_estimate_per_revolution() {
         "{tracking} of {}",
         est.len()
     );
+    // Heartbeats follow the board's clock (`Robot::tick`), which this run does not give.
     let heartbeats = out
         .frames
         .iter()
         .filter(|(m, _)| matches!(m, Message::Heartbeat(_)))
         .count();
-    assert_eq!(heartbeats, 29 / 5);
+    assert_eq!(heartbeats, 0);
     assert!(out.saved.is_some());
 }
 

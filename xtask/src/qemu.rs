@@ -429,9 +429,15 @@ pub fn run_robot(
         None => None,
     };
     let paced = forwarding.is_some();
+    // The LiDAR's first bytes go in before the link's: the firmware takes a LiDAR that has sent
+    // no valid frame for a second (counted from its start) as silent and then reads the link
+    // whatever its odometry window holds, which the host's replay does not do.
+    let (lidar_started, link_may_start) = std::sync::mpsc::channel::<()>();
     let (sent, status) = std::thread::scope(|scope| {
         let sh = &shared;
         let w2 = scope.spawn(move || -> std::io::Result<(UnixStream, Written)> {
+            // Ended without a word (the LiDAR's writer failed): go on, its error is reported.
+            let _ = link_may_start.recv();
             let written = if paced {
                 bridge::write_paced(&mut c2, link, sh)?
             } else {
@@ -449,6 +455,10 @@ pub fn run_robot(
             let mut at = Instant::now();
             for (i, piece) in lidar.chunks(16384).enumerate() {
                 c1.write_all(piece)?;
+                if i == 0 {
+                    c1.flush()?;
+                    let _ = lidar_started.send(());
+                }
                 if at.elapsed() > Duration::from_secs(10) {
                     eprintln!(
                         "xtask: sent {} of {} LiDAR bytes",

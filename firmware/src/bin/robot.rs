@@ -55,8 +55,6 @@ static BLOB: &[u8] = include_bytes!("../../assets/intel.bin");
 /// Its known-free cells, for global localization (`docs/free-space-format.md`).
 static FREE: &[u8] = include_bytes!("../../assets/intel-free-space.bin");
 
-/// Silence on the LiDAR line after which a heartbeat goes out every second, ms.
-const STALL_MS: u32 = 1_000;
 /// With the feature `emulator`: silence on both input lines after which the program ends, ms.
 #[cfg(feature = "emulator")]
 const EXIT_AFTER_MS: u32 = 3_000;
@@ -103,6 +101,31 @@ fn SysTick() {
 
 fn millis() -> u32 {
     MILLIS.load(Ordering::Relaxed)
+}
+
+/// The board's monotonic clock for [`Robot::tick`]: SysTick's milliseconds as µs since start,
+/// carried past the `u32`'s wrap (read at least once every 49 days: every turn of the loop).
+struct BoardClock {
+    last_ms: u32,
+    us: u64,
+}
+
+impl BoardClock {
+    fn new() -> Self {
+        Self {
+            last_ms: millis(),
+            us: u64::from(millis()) * 1000,
+        }
+    }
+
+    fn now_us(&mut self) -> u64 {
+        let ms = millis();
+        self.us = self
+            .us
+            .saturating_add(u64::from(ms.wrapping_sub(self.last_ms)) * 1000);
+        self.last_ms = ms;
+        self.us
+    }
 }
 
 /// The last good estimate, in RAM that a reset leaves alone (`.uninit`): a magic word, the
@@ -364,7 +387,7 @@ fn main() -> ! {
 
     let mut probe = CountProbe;
     let (mut last_lidar_ms, mut last_link_ms) = (millis(), millis());
-    let mut last_heartbeat_ms = millis();
+    let mut clock = BoardClock::new();
     let (mut lidar_peak, mut link_peak) = (0usize, 0usize);
     let mut overruns_reported = 0u32;
     let mut tx_bytes = 0u32;
@@ -413,16 +436,9 @@ fn main() -> ! {
             robot.add_drops(overruns.wrapping_sub(overruns_reported));
             overruns_reported = overruns;
         }
-        // The LiDAR went quiet: heartbeats keep coming, once a second.
-        if now.wrapping_sub(last_lidar_ms) >= STALL_MS
-            && now.wrapping_sub(last_heartbeat_ms) >= STALL_MS
-        {
-            robot.send_heartbeat(&mut sink);
-            last_heartbeat_ms = now;
-        }
-        if progress.processed {
-            last_heartbeat_ms = now;
-        }
+        // The board's clock: a heartbeat every period whatever the LiDAR sends, and the link
+        // read at its pace once the LiDAR has sent no valid frame for a while.
+        robot.tick(clock.now_us(), &mut sink);
         tx_bytes = tx_bytes.wrapping_add(board::pump(&mut tx_c));
         #[cfg(feature = "emulator")]
         if now.wrapping_sub(last_lidar_ms) >= EXIT_AFTER_MS
@@ -432,7 +448,7 @@ fn main() -> ! {
             report(&robot, &sink, tx_bytes, (lidar_peak, link_peak), seeded);
             exit(sink.dropped == 0)
         }
-        let _ = last_link_ms;
+        let _ = (last_lidar_ms, last_link_ms);
         if progress.is_idle() && !tx_c.ready() {
             cortex_m::asm::wfi();
         }

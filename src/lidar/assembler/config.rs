@@ -41,6 +41,13 @@ pub struct AssemblerConfig {
     /// The point timestamps wrap to 0 at this many milliseconds (LD06: 30,000; a caller that
     /// stamps points with its own `u16` millisecond clock: 0, meaning 65,536).
     pub timestamp_wrap_ms: u16,
+    /// Whether the points' timestamps are the sensor's own, taken as each point was measured
+    /// (`true`, the LD06's): then a gap between two points tells how many turns went by, and
+    /// turns lost in it are counted. `false` for a receiver's clock read once per received
+    /// chunk of bytes (a protocol without timestamps, e.g. [`crate::lidar::xv11`]): such a
+    /// stamp can lag the points by a whole chunk, so revolutions follow the angles alone, as
+    /// without timestamps, and the stamps only time them ([`Revolution`]).
+    pub sensor_timestamps: bool,
 }
 
 impl AssemblerConfig {
@@ -51,6 +58,7 @@ impl AssemblerConfig {
             max_range_m: layout.max_range_m(),
             min_quality: 0,
             timestamp_wrap_ms: crate::lidar::ld06::TIMESTAMP_WRAP_MS,
+            sensor_timestamps: true,
         }
     }
 }

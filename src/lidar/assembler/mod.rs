@@ -9,7 +9,8 @@
 //!   180° below the previous point's. That point opens the next revolution, so a scan never
 //!   mixes two revolutions. Every point (flagged invalid ones included) moves the rotor angle.
 //!   A stopped motor never wraps and therefore never emits a scan; its points keep replacing
-//!   each other in the bins, in fixed memory. (With timestamps, a gap between two points longer
+//!   each other in the bins, in fixed memory. (With the sensor's own timestamps
+//!   ([`AssemblerConfig::sensor_timestamps`]), a gap between two points longer
 //!   than half a turn at the learnt rate is read as turns gone by: the revolution is closed, on
 //!   the safe side, even if the motor had in fact stopped during the gap.) The first revolution after [`ScanAssembler::new`]
 //!   or [`ScanAssembler::reset`] is usually partial: its unvisited beams are NaN, like every
@@ -148,9 +149,10 @@ impl<const N: usize> ScanAssembler<N> {
     /// Moves the rotor to angle `a` (stamped `t`), returns how many times it crossed 0°.
     ///
     /// The advance from the previous point is the signed angle difference in `(−180°, 180°]`;
-    /// when both points carry timestamps and a rotation rate is known, whole turns are added so
-    /// that the advance is the one nearest to `rate · Δt` (data lost for more than half a turn
-    /// cannot hide a wrap).
+    /// when both points carry timestamps of the sensor
+    /// ([`AssemblerConfig::sensor_timestamps`]) and a rotation rate is known, whole turns are
+    /// added so that the advance is the one nearest to `rate · Δt` (data lost for more than half
+    /// a turn cannot hide a wrap).
     #[inline(always)]
     fn advance(&mut self, a: f32, t: Option<u16>) -> u32 {
         let prev = core::mem::replace(&mut self.prev_angle_deg, a);
@@ -164,6 +166,10 @@ impl<const N: usize> ScanAssembler<N> {
             da -= 360.0;
         } else if da <= -180.0 {
             da += 360.0;
+        }
+        if !self.config.sensor_timestamps {
+            // A receiver's stamps, per chunk: they count no turn.
+            return self.settle(a, da);
         }
         // Points of one frame share a timestamp (Δt = 0 adds no turn): skip the arithmetic.
         if let (Some(t), Some(tp), Some(rate)) = (t, prev_ms, self.rate_deg_per_ms) {

@@ -75,6 +75,7 @@ fn stopped_motor_never_emits_and_thresholds_count() {
         max_range_m: 5.0,
         min_quality: 10,
         timestamp_wrap_ms: 0,
+        sensor_timestamps: true,
     };
     let mut a = ScanAssembler::new(&layout, cfg).unwrap();
     for i in 0..100_000 {

@@ -13,6 +13,9 @@ use crate::lidar::{DecoderStats, LidarPoint};
 pub struct Xv11Decoder {
     hunt: HeaderHunt<PACKET_LEN, Xv11Header>,
     last_speed_rpm_q6: Option<u16>,
+    /// [`Xv11Decoder::feed_received`]: the receiver's time of the chunk in which the packet
+    /// being buffered started, ms.
+    started_ms: u16,
 }
 
 impl Default for Xv11Decoder {
@@ -27,6 +30,7 @@ impl Xv11Decoder {
         Self {
             hunt: HeaderHunt::new(),
             last_speed_rpm_q6: None,
+            started_ms: 0,
         }
     }
 
@@ -35,6 +39,40 @@ impl Xv11Decoder {
     pub fn feed(&mut self, bytes: &[u8], mut on_point: impl FnMut(LidarPoint)) {
         for &b in bytes {
             self.push_byte(b, &mut on_point);
+        }
+    }
+
+    /// Feeds a chunk of received bytes, stamping the readings with the receiver's clock (the
+    /// protocol has no timestamps): `received_ms` is the receiver's millisecond clock (wrapping
+    /// at 2¹⁶) when the chunk was read, and every reading of a packet is stamped with the time
+    /// of the chunk in which the packet's first byte arrived, so that a revolution's first
+    /// stamp is that of the chunk its first packet started in, however the bytes are split.
+    ///
+    /// The stamps lag the readings by up to a chunk: give them to a [`ScanAssembler`] with
+    /// [`AssemblerConfig::sensor_timestamps`] `false` and
+    /// [`AssemblerConfig::timestamp_wrap_ms`] 0, which then cuts revolutions by the angles
+    /// alone (its scans do not depend on the chunks) and only times them with the stamps.
+    ///
+    /// [`ScanAssembler`]: crate::lidar::ScanAssembler
+    /// [`AssemblerConfig::sensor_timestamps`]: crate::lidar::AssemblerConfig::sensor_timestamps
+    /// [`AssemblerConfig::timestamp_wrap_ms`]: crate::lidar::AssemblerConfig::timestamp_wrap_ms
+    pub fn feed_received(
+        &mut self,
+        bytes: &[u8],
+        received_ms: u16,
+        mut on_point: impl FnMut(LidarPoint),
+    ) {
+        for &b in bytes {
+            if self.hunt.len() == 0 {
+                // This byte may open a packet (a byte that does not is skipped, and the next
+                // one sets the time again).
+                self.started_ms = received_ms;
+            }
+            let started = self.started_ms;
+            self.push_byte(b, &mut |mut p: LidarPoint| {
+                p.timestamp_ms = Some(started);
+                on_point(p);
+            });
         }
     }
 

@@ -395,3 +395,251 @@ fn a_seed_beyond_the_link_s_range_is_not_used() {
         assert_eq!(counters.updates, 0);
     }
 }
+
+/// `n` bytes of line noise, as a LiDAR at the wrong baud rate sends: pseudo-random, with no
+/// LD06 header byte (0x54) in them, so that the decoder can only skip every one.
+fn noise(n: usize, seed: u64) -> Vec<u8> {
+    let mut state = seed;
+    (0..n)
+        .map(|_| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            match (state >> 56) as u8 {
+                0x54 => 0x55,
+                b => b,
+            }
+        })
+        .collect()
+}
+
+/// Runs `robot` over `steps` (the board's time at the end of the step, µs, and the LiDAR and
+/// link bytes that arrived during it) as the firmware's main loop does: polls until idle with
+/// the step's bytes, then ticks the board's clock. Every byte must be read in the step it arrived
+/// in (the link at its pace whatever the LiDAR does). Returns the heartbeats with the board time
+/// each was sent at and the LiDAR bytes handed over by then, and the board times of the steps
+/// after which the LiDAR was taken as silent.
+fn run_clocked<const N: usize>(
+    robot: &mut Robot<'_, N, BEAMS>,
+    steps: impl IntoIterator<Item = (u64, Vec<u8>, Vec<u8>)>,
+    sink: &mut Collect,
+) -> (Vec<(u64, u64, Heartbeat)>, Vec<u64>) {
+    let mut beats = Vec::new();
+    let mut silent = Vec::new();
+    let mut lidar_total = 0u64;
+    for (now_us, lidar, link) in steps {
+        let (mut ls, mut ks) = (SliceSource::new(&lidar), SliceSource::new(&link));
+        for _ in 0..1_000 {
+            if robot.poll(&mut ls, &mut ks, sink).is_idle() {
+                break;
+            }
+        }
+        assert!(
+            ks.is_empty(),
+            "at {now_us} µs: {} of {} link bytes read",
+            ks.taken(),
+            link.len()
+        );
+        assert!(ls.is_empty(), "at {now_us} µs: LiDAR bytes left");
+        lidar_total += lidar.len() as u64;
+        let before = sink.frames.len();
+        let sent = robot.tick(now_us, sink);
+        let new: Vec<Heartbeat> = sink.frames[before..]
+            .iter()
+            .filter_map(|(m, _)| match m {
+                Message::Heartbeat(h) => Some(*h),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(sent, !new.is_empty());
+        beats.extend(new.into_iter().map(|h| (now_us, lidar_total, h)));
+        if robot.is_lidar_silent() {
+            silent.push(now_us);
+        }
+    }
+    (beats, silent)
+}
+
+/// The LiDAR taken as silent at every step from 1 s (`lidar_silence_us`) after the first tick at
+/// 10 ms to the end at `until_us`, steps of 10 ms.
+fn assert_silent_after_1_s(silent: &[u64], until_us: u64) {
+    let want: Vec<u64> = (1_010_000..=until_us).step_by(10_000).collect();
+    assert!(
+        silent == want,
+        "silent from {:?} to {:?} µs, {} steps",
+        silent.first(),
+        silent.last(),
+        silent.len()
+    );
+}
+
+/// The LD06's line at 230,400 baud (8N1): bytes that arrive in 10 ms.
+const LINE_BYTES_PER_10_MS: usize = 230;
+
+/// Heartbeats at most 1.5 s apart over `until_us`, the first within 1.5 s of the start.
+fn assert_periodic(beats: &[(u64, u64, Heartbeat)], until_us: u64) {
+    let times: Vec<u64> = beats.iter().map(|b| b.0).collect();
+    let mut last = 0;
+    for &t in times.iter().chain([until_us].iter()) {
+        assert!(t - last <= 1_500_000, "heartbeats at {times:?} µs");
+        last = t;
+    }
+    for (t, _, h) in beats {
+        assert_eq!(u64::from(h.uptime_ms), t / 1000);
+    }
+}
+
+#[test]
+fn heartbeats_keep_coming_while_the_lidar_sends_noise_and_count_its_bytes() {
+    let room = room();
+    let mut store = Particles::<CAP>::new();
+    let view = FieldView::parse(&room.blob).unwrap();
+    let mut robot =
+        Robot::<CAP, BEAMS>::new(&mut store, view, None, layout(), config(), None).unwrap();
+    let mut sink = Collect::default();
+    // 8 s of noise at the line's rate.
+    let steps =
+        (1..=800u64).map(|k| (k * 10_000, noise(LINE_BYTES_PER_10_MS, k), Vec::<u8>::new()));
+    let (beats, silent) = run_clocked(&mut robot, steps, &mut sink);
+    assert_periodic(&beats, 8_000_000);
+    assert!(beats.len() >= 7, "{}", beats.len());
+    assert_silent_after_1_s(&silent, 8_000_000);
+    // Every noise byte handed over by then is in the heartbeat's count of skipped bytes.
+    for (t, fed, h) in &beats {
+        assert_eq!(u64::from(h.lidar_skipped), *fed, "at {t} µs");
+        assert_eq!(h.scans, 0);
+    }
+    // A second later, all 8 s of noise.
+    assert!(robot.tick(9_000_000, &mut sink));
+    let Some((Message::Heartbeat(h), _)) = sink.frames.last() else {
+        panic!("no heartbeat");
+    };
+    assert_eq!(h.lidar_skipped as usize, 800 * LINE_BYTES_PER_10_MS);
+    assert_eq!(h.lidar_skipped, robot.lidar_stats().bytes);
+}
+
+#[test]
+fn heartbeats_keep_coming_while_the_lidar_is_silent() {
+    let room = room();
+    let mut store = Particles::<CAP>::new();
+    let view = FieldView::parse(&room.blob).unwrap();
+    let mut robot =
+        Robot::<CAP, BEAMS>::new(&mut store, view, None, layout(), config(), None).unwrap();
+    let mut sink = Collect::default();
+    let steps = (1..=800u64).map(|k| (k * 10_000, Vec::new(), Vec::new()));
+    let (beats, silent) = run_clocked(&mut robot, steps, &mut sink);
+    assert_periodic(&beats, 8_000_000);
+    assert!(beats.len() >= 7, "{}", beats.len());
+    assert_silent_after_1_s(&silent, 8_000_000);
+}
+
+#[test]
+fn heartbeats_keep_their_period_while_the_lidar_sends_good_data() {
+    let room = room();
+    let (lidar, _) = lidar_stream(40);
+    let link = paced_link(4_100_000, |t| t);
+    let mut store = Particles::<CAP>::new();
+    let view = FieldView::parse(&room.blob).unwrap();
+    let mut robot =
+        Robot::<CAP, BEAMS>::new(&mut store, view, None, layout(), config(), None).unwrap();
+    let mut sink = Collect::default();
+    // Board time = LiDAR time here: each LD06 frame and link frame in the step it ends in.
+    let frames: Vec<(u64, &[u8])> = lidar
+        .chunks(ld06::FRAME_LEN)
+        .enumerate()
+        .map(|(i, c)| (frame_end_us(i), c))
+        .collect();
+    let steps = (1..=410u64).map(|k| {
+        let window = (k - 1) * 10_000..k * 10_000;
+        let lidar: Vec<u8> = frames
+            .iter()
+            .filter(|(t, _)| window.contains(t))
+            .flat_map(|(_, c)| c.iter().copied())
+            .collect();
+        let link: Vec<u8> = link
+            .iter()
+            .filter(|(t, _)| window.contains(t))
+            .flat_map(|(_, b)| b.iter().copied())
+            .collect();
+        (k * 10_000, lidar, link)
+    });
+    let (beats, silent) = run_clocked(&mut robot, steps, &mut sink);
+    assert_periodic(&beats, 4_100_000);
+    assert_eq!(beats.len(), 4);
+    // Good frames all along: never silent (the last one ends at 4 s; 100 ms later is not 1 s).
+    assert!(silent.is_empty(), "{silent:?}");
+    assert_eq!(estimates(&sink).len(), 39);
+    for (_, _, h) in &beats {
+        assert_eq!(h.lidar_skipped, 0);
+        assert!(h.scans > 0);
+    }
+}
+
+/// The link of [`the_link_is_read_while_the_lidar_is_silent`] paced at 50 Hz: an initial pose
+/// and 4 s of odometry, each frame with its time.
+fn odometry_for_4_s() -> Vec<(u64, Vec<u8>)> {
+    let mut e = Encoder::new();
+    let mut out = Vec::new();
+    let mut t = 0;
+    while t <= 4_000_000 {
+        let mut bytes = frame(&mut e, odo(t, truth(t)));
+        if t == 0 {
+            bytes.extend(frame(&mut e, initial(truth(t), COV)));
+        }
+        out.push((t, bytes));
+        t += 20_000;
+    }
+    out
+}
+
+#[test]
+fn the_link_is_read_at_its_pace_while_the_lidar_sends_noise_or_nothing() {
+    let room = room();
+    let link = odometry_for_4_s();
+    for noisy in [false, true] {
+        let mut store = Particles::<CAP>::new();
+        let view = FieldView::parse(&room.blob).unwrap();
+        let mut robot =
+            Robot::<CAP, BEAMS>::new(&mut store, view, None, layout(), config(), None).unwrap();
+        let mut sink = Collect::default();
+        // No call of `set_lidar_silent`: the board's clock alone tells the silence.
+        // Step k ends at k · 10 ms + 1 µs: the frames stamped after the previous step's end.
+        let steps = (0..=400u64).map(|k| {
+            let window = (k * 10_000).saturating_sub(9_999)..k * 10_000 + 1;
+            let bytes: Vec<u8> = link
+                .iter()
+                .filter(|(t, _)| window.contains(t))
+                .flat_map(|(_, b)| b.iter().copied())
+                .collect();
+            let lidar = if noisy {
+                noise(LINE_BYTES_PER_10_MS, k)
+            } else {
+                Vec::new()
+            };
+            (k * 10_000 + 1, lidar, bytes)
+        });
+        // `run_clocked` checks that every link byte is read in the step it arrives in.
+        let (beats, _) = run_clocked(&mut robot, steps, &mut sink);
+        assert_periodic(&beats, 4_000_001);
+        let counters = robot.counters();
+        assert_eq!(counters.odometry, link.len() as u32, "{counters:?}");
+        let dropped = link.len() as u32 - window::WINDOW as u32;
+        assert_eq!(counters.odometry_dropped, dropped, "{counters:?}");
+        assert_eq!(errors(&sink), []);
+        assert_eq!(beats.last().map(|b| b.2.drops), Some(dropped));
+        // The LiDAR comes back: the initial pose sent during the silence is carried out.
+        let (lidar, _) = lidar_stream_of(8, |_| truth(4_000_000));
+        let mut ls = SliceSource::new(&lidar);
+        for _ in 0..1_000 {
+            if robot
+                .poll(&mut ls, &mut SliceSource::new(&[]), &mut sink)
+                .is_idle()
+            {
+                break;
+            }
+        }
+        assert!(robot.is_initialized(), "noisy {noisy}");
+        assert!(!estimates(&sink).is_empty(), "noisy {noisy}");
+        assert_eq!(robot.counters().commands, 1);
+    }
+}
