@@ -117,6 +117,22 @@ fn err<E: std::fmt::Debug>(what: &str) -> impl FnOnce(E) -> RosError + '_ {
 
 /// An absolute name, `/base` or `/ns/base` (nav2_amcl's names are relative to its node's
 /// namespace, `/` by default).
+/// A server named `name` of the service type `srv`, with `qos` for its requests and replies.
+fn serve<Req, Resp>(
+    node: &mut Node,
+    mapping: ServiceMapping,
+    name: &Name,
+    srv: &ServiceTypeName,
+    qos: &QosProfile,
+) -> Result<Server<Req, Resp>, RosError>
+where
+    Req: ros2_client::Message + Clone + 'static,
+    Resp: ros2_client::Message + 'static,
+{
+    node.create_server(mapping, name, srv, qos.clone(), qos.clone())
+        .map_err(|e| RosError(format!("service {name}: {e:?}")))
+}
+
 fn name(n: &str) -> Result<Name, RosError> {
     let (ns, base) = match n.rsplit_once('/') {
         Some(("", base)) => ("/", base),
@@ -186,67 +202,54 @@ impl RosNode {
             .reliability_reliable(WhenFull::DEFAULT)
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 10 });
+        let mapping = config.service_mapping;
         let empty = ServiceTypeName::new("std_srvs", "Empty");
-        let mut server = |n: &str| {
-            node.create_server::<Empty, Empty>(
-                config.service_mapping,
-                &relative(n)?,
-                &empty,
-                service_qos.clone(),
-                service_qos.clone(),
-            )
-            .map_err(|e| RosError(format!("service {n}: {e:?}")))
-        };
-        let global = server("reinitialize_global_localization")?;
-        let nomotion = server("request_nomotion_update")?;
+        let global = serve(
+            &mut node,
+            mapping,
+            &relative("reinitialize_global_localization")?,
+            &empty,
+            &service_qos,
+        )?;
+        let nomotion = serve(
+            &mut node,
+            mapping,
+            &relative("request_nomotion_update")?,
+            &empty,
+            &service_qos,
+        )?;
         // The lifecycle services are the node's own: `<node>/get_state` and so on.
         let node_name = &config.name;
-        let lifecycle_name = |n: &str, srv: &str| -> Result<(Name, ServiceTypeName), RosError> {
-            Ok((
-                relative(&format!("{node_name}/{n}"))?,
-                ServiceTypeName::new("lifecycle_msgs", srv),
-            ))
-        };
-        let (n, t) = lifecycle_name("get_state", "GetState")?;
-        let get_state = node
-            .create_server(
-                config.service_mapping,
-                &n,
-                &t,
-                service_qos.clone(),
-                service_qos.clone(),
-            )
-            .map_err(|e| RosError(format!("service get_state: {e:?}")))?;
-        let (n, t) = lifecycle_name("change_state", "ChangeState")?;
-        let change_state = node
-            .create_server(
-                config.service_mapping,
-                &n,
-                &t,
-                service_qos.clone(),
-                service_qos.clone(),
-            )
-            .map_err(|e| RosError(format!("service change_state: {e:?}")))?;
-        let (n, t) = lifecycle_name("get_available_states", "GetAvailableStates")?;
-        let get_available_states = node
-            .create_server(
-                config.service_mapping,
-                &n,
-                &t,
-                service_qos.clone(),
-                service_qos.clone(),
-            )
-            .map_err(|e| RosError(format!("service get_available_states: {e:?}")))?;
-        let (n, t) = lifecycle_name("get_available_transitions", "GetAvailableTransitions")?;
-        let get_available_transitions = node
-            .create_server(
-                config.service_mapping,
-                &n,
-                &t,
-                service_qos.clone(),
-                service_qos,
-            )
-            .map_err(|e| RosError(format!("service get_available_transitions: {e:?}")))?;
+        let own = |n: &str| relative(&format!("{node_name}/{n}"));
+        let lifecycle_type = |srv: &str| ServiceTypeName::new("lifecycle_msgs", srv);
+        let get_state = serve(
+            &mut node,
+            mapping,
+            &own("get_state")?,
+            &lifecycle_type("GetState"),
+            &service_qos,
+        )?;
+        let change_state = serve(
+            &mut node,
+            mapping,
+            &own("change_state")?,
+            &lifecycle_type("ChangeState"),
+            &service_qos,
+        )?;
+        let get_available_states = serve(
+            &mut node,
+            mapping,
+            &own("get_available_states")?,
+            &lifecycle_type("GetAvailableStates"),
+            &service_qos,
+        )?;
+        let get_available_transitions = serve(
+            &mut node,
+            mapping,
+            &own("get_available_transitions")?,
+            &lifecycle_type("GetAvailableTransitions"),
+            &service_qos,
+        )?;
         Ok(Self {
             _node: node,
             amcl_pose,

@@ -4,8 +4,10 @@
 //! `amcl_pose`. Every stamp received must be later than the one before and, on the computer's
 //! clock, within 0.2 s of when it was received; the bridge must end with the link-lost code.
 
+mod common;
+
 use std::io::Write;
-use std::net::{IpAddr, TcpListener, TcpStream};
+use std::net::{TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -17,10 +19,7 @@ use beamfield_bridge::outbox::Outbox;
 use beamfield_bridge::port::now_ns;
 use beamfield_bridge::ros::{NodeConfig, RosNode};
 use beamfield_bridge::{run, BridgeArgs, BridgeReport, ClockArg, Rmw, EXIT_LINK_LOST};
-use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{
-    Context, MessageTypeName, Name, Node, NodeName, NodeOptions, QosProfile, Subscription,
-};
+use ros2_client::{Node, Subscription};
 
 /// One DDS run at a time: the machine has few cores and discovery is timing-sensitive.
 static SERIAL: Mutex<()> = Mutex::new(());
@@ -123,32 +122,14 @@ type Received = Vec<(u32, i128, i128)>;
 
 /// A node on `domain` (DDS on 127.0.0.1 only) subscribed to `amcl_pose`.
 fn subscriber(domain: u16) -> (Node, Subscription<PoseWithCovarianceStamped>) {
-    let participant = rustdds::DomainParticipantBuilder::new(domain)
-        .with_only_networks([IpAddr::from([127, 0, 0, 1])])
-        .same_host_loopback(true)
-        .build()
-        .unwrap();
-    let context = Context::from_domain_participant(participant).unwrap();
-    let mut node = context
-        .new_node(
-            NodeName::new("/", "fault_check").unwrap(),
-            NodeOptions::new(),
-        )
-        .unwrap();
-    let qos = QosProfile::publisher_default()
-        .reliability_reliable(WhenFull::DEFAULT)
-        .durability(Durability::Volatile)
-        .history(History::KeepLast { depth: 10_000 });
-    let topic = node
-        .create_topic(
-            &Name::new("/", "amcl_pose").unwrap(),
-            MessageTypeName::new("geometry_msgs", "PoseWithCovarianceStamped"),
-            &qos,
-        )
-        .unwrap();
-    let sub = node
-        .create_subscription::<PoseWithCovarianceStamped>(&topic, None)
-        .unwrap();
+    let mut node = common::loopback_node(domain, "fault_check");
+    let sub = common::subscribe(
+        &mut node,
+        "amcl_pose",
+        "geometry_msgs",
+        "PoseWithCovarianceStamped",
+        10_000,
+    );
     (node, sub)
 }
 

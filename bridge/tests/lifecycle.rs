@@ -4,8 +4,10 @@
 //! the lifecycle_msgs types, DDS on 127.0.0.1 only. `amcl_pose` must come only while the node
 //! is active.
 
+mod common;
+
 use std::io::Write;
-use std::net::{IpAddr, TcpListener};
+use std::net::TcpListener;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -20,8 +22,7 @@ use beamfield_bridge::msg::{
 use beamfield_bridge::{run, BridgeArgs, ClockArg, Rmw, EXIT_STOPPED};
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
-    Client, Context, Message as RosMessage, MessageTypeName, Name, Node, NodeName, NodeOptions,
-    QosProfile, ServiceMapping, ServiceTypeName,
+    Client, Message as RosMessage, Name, Node, QosProfile, ServiceMapping, ServiceTypeName,
 };
 
 /// Calls `client` with `req` until an answer comes (service discovery takes a moment), at most
@@ -78,32 +79,14 @@ fn transition(label: &str) -> ChangeStateRequest {
 #[test]
 fn the_lifecycle_services_drive_the_node_and_poses_come_only_while_active() {
     let domain = 72;
-    let participant = rustdds::DomainParticipantBuilder::new(domain)
-        .with_only_networks([IpAddr::from([127, 0, 0, 1])])
-        .same_host_loopback(true)
-        .build()
-        .unwrap();
-    let context = Context::from_domain_participant(participant).unwrap();
-    let mut node = context
-        .new_node(
-            NodeName::new("/", "lifecycle_manager_check").unwrap(),
-            NodeOptions::new(),
-        )
-        .unwrap();
-    let qos = QosProfile::publisher_default()
-        .reliability_reliable(WhenFull::DEFAULT)
-        .durability(Durability::Volatile)
-        .history(History::KeepLast { depth: 1000 });
-    let topic = node
-        .create_topic(
-            &Name::new("/", "amcl_pose").unwrap(),
-            MessageTypeName::new("geometry_msgs", "PoseWithCovarianceStamped"),
-            &qos,
-        )
-        .unwrap();
-    let poses = node
-        .create_subscription::<PoseWithCovarianceStamped>(&topic, None)
-        .unwrap();
+    let mut node = common::loopback_node(domain, "lifecycle_manager_check");
+    let poses = common::subscribe::<PoseWithCovarianceStamped>(
+        &mut node,
+        "amcl_pose",
+        "geometry_msgs",
+        "PoseWithCovarianceStamped",
+        1000,
+    );
     let get_state: Client<Empty, GetStateResponse> = client(&mut node, "get_state", "GetState");
     let change: Client<ChangeStateRequest, ChangeStateResponse> =
         client(&mut node, "change_state", "ChangeState");

@@ -1,18 +1,15 @@
 //! The bridge's link reader against a device that garbles and drops bytes: every intact frame
 //! arrives, every broken one is refused and counted, and the reader keeps going.
 
-use beamfield::link::{Encoder, Estimate, EstimateFlags, Heartbeat, Message, MAX_WIRE_LEN};
+mod common;
+use common::frame;
+
+use beamfield::link::{Encoder, Estimate, EstimateFlags, Heartbeat, Message};
 use beamfield::Pose;
 use beamfield_bridge::port::{Endpoint, Incoming, Port};
 use std::io::Write;
 use std::net::TcpListener;
 use std::time::{Duration, Instant};
-
-fn frame(enc: &mut Encoder, m: &Message) -> Vec<u8> {
-    let mut w = [0u8; MAX_WIRE_LEN];
-    let n = enc.encode(m, &mut w).unwrap();
-    w[..n].to_vec()
-}
 
 #[test]
 fn garbled_and_cut_frames_are_counted_and_the_rest_arrives() {

@@ -5,30 +5,25 @@
 //! do, the same transform, each stamped the computer's time plus `transform_tolerance` and later
 //! than the one before; and it must stop once the device is silent.
 
+mod common;
+use common::frame;
+
 use std::io::Write;
-use std::net::{IpAddr, TcpListener};
+use std::net::TcpListener;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use beamfield::link::{Encoder, Estimate, EstimateFlags, Heartbeat, Message, MAX_WIRE_LEN};
+use beamfield::link::{Encoder, Estimate, EstimateFlags, Heartbeat, Message};
 use beamfield::Pose;
 use beamfield_bridge::msg::TfMessage;
 use beamfield_bridge::port::now_ns;
 use beamfield_bridge::repeat::DEVICE_SILENT_AFTER;
 use beamfield_bridge::{run, BridgeArgs, ClockArg, Rmw};
-use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Context, MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 
 const TOLERANCE_S: f64 = 0.5;
 /// Largest |receive − (stamp − tolerance)| accepted, ns.
 const MAX_LAG_NS: i128 = 200_000_000;
-
-fn frame(enc: &mut Encoder, m: &Message) -> Vec<u8> {
-    let mut w = [0u8; MAX_WIRE_LEN];
-    let n = enc.encode(m, &mut w).unwrap();
-    w[..n].to_vec()
-}
 
 /// `/tf` as received here: (stamp ns, receive ns, x, y).
 type Received = Vec<(i128, i128, f64, f64)>;
@@ -36,27 +31,8 @@ type Received = Vec<(i128, i128, f64, f64)>;
 #[test]
 fn map_to_odom_is_resent_while_the_device_is_alive_and_stops_when_it_is_silent() {
     let domain = 71;
-    let participant = rustdds::DomainParticipantBuilder::new(domain)
-        .with_only_networks([IpAddr::from([127, 0, 0, 1])])
-        .same_host_loopback(true)
-        .build()
-        .unwrap();
-    let context = Context::from_domain_participant(participant).unwrap();
-    let mut node = context
-        .new_node(NodeName::new("/", "tf_check").unwrap(), NodeOptions::new())
-        .unwrap();
-    let qos = QosProfile::publisher_default()
-        .reliability_reliable(WhenFull::DEFAULT)
-        .durability(Durability::Volatile)
-        .history(History::KeepLast { depth: 10_000 });
-    let topic = node
-        .create_topic(
-            &Name::new("/", "tf").unwrap(),
-            MessageTypeName::new("tf2_msgs", "TFMessage"),
-            &qos,
-        )
-        .unwrap();
-    let sub = node.create_subscription::<TfMessage>(&topic, None).unwrap();
+    let mut node = common::loopback_node(domain, "tf_check");
+    let sub = common::subscribe::<TfMessage>(&mut node, "tf", "tf2_msgs", "TFMessage", 10_000);
     let done = Arc::new(AtomicBool::new(false));
     let stop = Arc::clone(&done);
     let reader = std::thread::spawn(move || {
