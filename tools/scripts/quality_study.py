@@ -14,6 +14,9 @@ Each input is LABEL=REPORT.json, where LABEL is `building/odometry` (e.g. `intel
   quality_study.py table FILES...   the states the runs reported themselves, per building.
   quality_study.py covariance FILES...   share of the tracked errors inside the reported 95 %
       ellipse, and the NEES, per building.
+  quality_study.py kidnap REPORT.json...   for `track --kidnap SCAN` reports: per run, the scans
+      from the kidnapping to the first update reporting Uncertain or Lost ("flagged"), to the
+      first reporting Lost, and to "found" (the first of 10 scans in a row within 0.2 m and 5°).
 
 Definitions (as in docs/localization.md):
 - a run is clean when its error never exceeds 0.5 m at a scan with a truth;
@@ -288,6 +291,50 @@ def cmd_covariance(a):
         print(f"| {key[0]} | {key[1]} | {n} | {share} | {med:.2f} / {mean:.2f} | {so} | {shrank} |")
 
 
+FOUND_M = 0.2
+FOUND_DEG = 5.0
+FOUND_SCANS = 10
+
+
+def cmd_kidnap(a):
+    print("| report | runs | flagged within 5 | Lost within 5 | scans to Lost (median) | found within 50 | scans to found (median) |")
+    print("|---|---|---|---|---|---|---|")
+    for path in a.files:
+        with open(path) as f:
+            report = json.load(f)
+        k = report.get("kidnap")
+        if k is None:
+            sys.exit(f"{path}: not a --kidnap run")
+        flagged, lost, found = [], [], []
+        for r in report["runs"]:
+            per = [p for p in r["per_scan"] if p["scan"] >= k]
+            first = lambda states: next((p["scan"] - k for p in per if p["quality"] in states), None)
+            flagged.append(first(("uncertain", "lost")))
+            lost.append(first(("lost",)))
+            f = None
+            for i in range(len(per) - FOUND_SCANS + 1):
+                w = per[i:i + FOUND_SCANS]
+                if all(q["error_m"] is not None and q["error_m"] <= FOUND_M
+                       and q["heading_error_deg"] <= FOUND_DEG for q in w):
+                    f = per[i]["scan"] - k
+                    break
+            found.append(f)
+        n = len(report["runs"])
+
+        def within(v, m):
+            return sum(1 for x in v if x is not None and x <= m)
+
+        def median(v):
+            xs = sorted(math.inf if x is None else x for x in v)
+            if not xs:
+                return "—"
+            mid = (xs[(len(xs) - 1) // 2] + xs[len(xs) // 2]) / 2
+            return "never" if math.isinf(mid) else f"{mid:g}"
+
+        print(f"| {path} | {n} | {within(flagged, 5)} of {n} | {within(lost, 5)} of {n} | {median(lost)} "
+              f"| {within(found, 50)} of {n} | {median(found)} |")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="cmd", required=True)
@@ -306,6 +353,9 @@ def main():
     c.add_argument("--scale", type=float, default=1.0, help="a what-if: scale the σ by this")
     c.add_argument("files", nargs="+")
     c.set_defaults(f=cmd_covariance)
+    k = sub.add_parser("kidnap")
+    k.add_argument("files", nargs="+")
+    k.set_defaults(f=cmd_kidnap)
     a = p.parse_args()
     a.f(a)
 
