@@ -13,6 +13,7 @@
 //! (a biased cell convention costs about 2.5 cm in x and y; a broken resampler or motion model
 //! loses the robot) does.
 
+use beamfield::mcl::QualityThresholds;
 use beamfield_tools::track::{run_once, Init, RunOptions, Weighting};
 use host_tests::intel_input;
 
@@ -39,7 +40,8 @@ fn tracking_options(seed: u64, scans: usize) -> RunOptions {
         kappa_uncertain: None,
         update_min: (0.0, 0.0),
         reset_per_update: 0,
-        clutter_share: 0.0,
+        clutter_share: QualityThresholds::DEFAULT.clutter_share,
+        lost_through: QualityThresholds::DEFAULT.lost_through,
     }
 }
 

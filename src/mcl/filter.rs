@@ -1079,11 +1079,12 @@ mod tests {
     fn eighteen_bytes_per_particle() {
         assert_eq!(core::mem::size_of::<Particles<1000>>(), 18 * 1000);
         let fixed = core::mem::size_of::<Mcl<'_, 1000>>();
-        // 408 on a 64-bit host: the quality signal's averages (the slow average of the
-        // explained share included) and its last scan fit, the recovery's counters, the last
+        // 416 on a 64-bit host: the quality signal's thresholds and averages (the slow
+        // average of the explained share and the share through walls included) and its last
+        // scan fit, the recovery's counters, the last
         // reported covariance and how it is made, the adaptive motion noise's and KLD
         // sampling's parameters, the noise scale, the reset in progress; nothing per particle.
-        assert!(fixed <= 408, "{fixed}");
+        assert!(fixed <= 416, "{fixed}");
         println!("Mcl: {fixed} bytes besides the particles");
     }
 

@@ -56,6 +56,9 @@ pub struct RunOptions {
     pub reset_per_update: u32,
     /// The quality signal's clutter allowance (`QualityThresholds::clutter_share`; 0: off).
     pub clutter_share: f32,
+    /// The quality signal's Lost on readings through mapped walls
+    /// (`QualityThresholds::lost_through`; 1: off).
+    pub lost_through: f32,
     /// The adaptive motion noise (target, rate, smallest and largest variance scale,
     /// `MclConfig::with_adaptive_noise`); None: off.
     pub adaptive_noise: Option<[f32; 4]>,
@@ -346,9 +349,10 @@ pub fn run_once(input: &TrackInput, o: &RunOptions) -> Result<RunResult, TrackEr
     let config = config
         .with_quality(QualityThresholds {
             clutter_share: o.clutter_share,
+            lost_through: o.lost_through,
             ..QualityThresholds::DEFAULT
         })
-        .map_err(|e| usage(format!("--clutter-share: {e}")))?
+        .map_err(|e| usage(format!("--clutter-share or --lost-through: {e}")))?
         .with_unexplained(o.unexplained.map(|(distance_m, max_share)| Unexplained {
             distance_m,
             max_share,

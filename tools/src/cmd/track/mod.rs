@@ -13,6 +13,7 @@ use crate::track::{
     synthesize_odometry, usage, Init, Metrics, RunOptions, TrackError, Weighting, WheelPreset,
     MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
 };
+use beamfield::mcl::QualityThresholds;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -161,10 +162,14 @@ pub struct TrackArgs {
     pub reset_per_update: u32,
     /// The quality signal's clutter allowance: up to this share of a scan's beams (0 to below 1)
     /// that end in front of a mapped wall the map does not explain are set aside before the
-    /// explained share is judged (QualityThresholds::clutter_share; 0, the default: off). 0.3
-    /// ends the false Lost on unmapped clutter but delays the Lost of a kidnapping.
-    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    /// explained share is judged (QualityThresholds::clutter_share; 0: off).
+    #[arg(long, default_value_t = QualityThresholds::DEFAULT.clutter_share, value_name = "S")]
     pub clutter_share: f32,
+    /// The quality signal's Lost on readings through mapped walls: an average share of beams
+    /// (0 to 1) that cross a mapped wall to reach their endpoint above which the state is Lost
+    /// (QualityThresholds::lost_through; 1: off).
+    #[arg(long, default_value_t = QualityThresholds::DEFAULT.lost_through, value_name = "SHARE")]
+    pub lost_through: f32,
     /// KLD sampling "MIN,MAX" (off by default; MclConfig::with_kld with nav2's pf_err 0.05,
     /// pf_z 0.99 and 0.5 m / 10° bins): the particles in use adapt at each resampling between
     /// MIN and MAX, starting from --particles.
@@ -296,6 +301,7 @@ pub fn options(args: &TrackArgs, seed: u64, scans: usize) -> Result<RunOptions, 
         update_min: (m[0], m[1]),
         reset_per_update: args.reset_per_update,
         clutter_share: args.clutter_share,
+        lost_through: args.lost_through,
         adaptive_noise,
         kld,
         adaptive_sigma,
