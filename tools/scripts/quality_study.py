@@ -10,7 +10,9 @@ Each input is LABEL=REPORT.json, where LABEL is `building/odometry` (e.g. `intel
       on the recorded inputs (explained / short / through shares, likelihood per beam, spread)
       for a grid of thresholds: false Lost on clean runs and detection of excursions, on the
       tuning buildings and on the others. Exact for runs with resetting off (the signal then
-      only reports; it does not change the run).
+      only reports; it does not change the run). --clutter and --through give the values of
+      clutter_share and lost_through to try, --others-fixed keeps the other three at their
+      defaults, --kidnap LABEL=REPORT.json adds kidnaps (resetting off) replayed: Lost within 5.
   quality_study.py table FILES...   the states the runs reported themselves, per building.
   quality_study.py covariance FILES...   share of the tracked errors inside the reported 95 %
       ellipse, and the NEES, per building.
@@ -54,6 +56,7 @@ DEFAULT = dict(
     spread_m=0.25,
     spread_rad=0.15,
     concentration=0.5,
+    through=1.0,
 )
 
 
@@ -84,7 +87,7 @@ def num(v):
 
 def replay(per, t):
     """The states QualityState::observe would give with thresholds t (f64, not f32)."""
-    fast = slow = e_avg = e_slow = float("nan")
+    fast = slow = e_avg = e_slow = t_avg = float("nan")
     streak = 0
     out = []
 
@@ -108,6 +111,7 @@ def replay(per, t):
             e = float("nan")
         e_avg = follow(e_avg, e, 0.5)
         e_slow = follow(e_slow, e, 0.02)
+        t_avg = follow(t_avg, fit[2], 0.5)
         wide = not (
             spread_m <= t["spread_m"]
             and spread_rad <= t["spread_rad"]
@@ -120,6 +124,7 @@ def replay(per, t):
             e_avg < t["lost_explained"]
             or (e_avg < t["lost_dropping"] and drop > t["dropping_nats"])
             or e_slow - e_avg > t["fall"]
+            or t_avg > t["through"]
         ):
             state = "lost"
         elif e_avg < t["tracking_explained"] or wide:
@@ -199,29 +204,72 @@ HEADER = (
 )
 
 
+def load_kidnaps(items):
+    """LABEL=REPORT.json of `track --kidnap SCAN` runs (resetting off): (building, scan, per)."""
+    out = []
+    for item in items:
+        label, path = item.split("=", 1)
+        building = label.split("/", 1)[0]
+        with open(path) as f:
+            report = json.load(f)
+        k = report.get("kidnap")
+        if k is None:
+            sys.exit(f"{path}: not a --kidnap run")
+        if report.get("resetting"):
+            sys.exit(f"{path}: a kidnap replayed must have resetting off")
+        for r in report["runs"]:
+            out.append((building, k, r["per_scan"]))
+    return out
+
+
+def kidnap_lost_within(kidnaps, t, within=5):
+    """Kidnaps whose replayed states report Lost within `within` scans, and their count."""
+    hit = 0
+    for _, k, per in kidnaps:
+        states = replay(per, t)
+        hit += any(s == "lost" and rec["scan"] - k <= within
+                   for rec, s in zip(per, states) if rec["scan"] >= k)
+    return hit, len(kidnaps)
+
+
 def cmd_sweep(a):
     runs = load(a.files)
     tune = set(a.tune.split(","))
+    kidnaps = load_kidnaps(a.kidnap)
+    floats = lambda text: [float(x) for x in text.split(",")]
     grid = []
-    for clutter in (0.0, 0.3, 0.5, 0.7):
-        for lost_explained in (0.25, 0.35, 0.45):
-            for fall in (0.3, 0.4, 0.5, 1.0):
-                for lost_after in (2, 3, 4):
-                    grid.append(dict(DEFAULT, clutter=clutter, lost_explained=lost_explained,
-                                     fall=fall, lost_after=lost_after))
+    for clutter in floats(a.clutter):
+        for through in floats(a.through):
+            for lost_explained in (0.35,) if a.others_fixed else (0.25, 0.35, 0.45):
+                for fall in (0.4,) if a.others_fixed else (0.3, 0.4, 0.5, 1.0):
+                    for lost_after in (3,) if a.others_fixed else (2, 3, 4):
+                        grid.append(dict(DEFAULT, clutter=clutter, through=through,
+                                         lost_explained=lost_explained, fall=fall,
+                                         lost_after=lost_after))
     parts = {
         "tuning": [r for r in runs if r["building"] in tune],
         "holdout": [r for r in runs if r["building"] not in tune],
     }
+    kparts = {
+        "tuning": [x for x in kidnaps if x[0] in tune],
+        "holdout": [x for x in kidnaps if x[0] not in tune],
+    }
     print(f"tuning: {sorted(tune)}; holdout: {sorted({r['building'] for r in parts['holdout']})}")
-    print("| part | clutter_share | lost_explained | lost_explained_fall | lost_after " + HEADER[1:].split("\n")[0])
-    print("|---|---|---|---|---" + HEADER.split("\n")[1])
+    extra = " kidnaps Lost within 5 |" if kidnaps else ""
+    print("| part | clutter_share | lost_through | lost_explained | lost_explained_fall | lost_after |"
+          + HEADER[1:].split("\n")[0] + extra)
+    print("|---|---|---|---|---|---" + HEADER.split("\n")[1] + ("---|" if kidnaps else ""))
     for t in grid:
         for part in ("tuning", "holdout") if a.both else ("tuning",):
             rs = parts[part]
             res = [judge(r, replay(r["per"], t)) for r in rs]
             s = summarize(rs, res)
-            print(f"| {part} | {t['clutter']} | {t['lost_explained']} | {t['fall']} | {t['lost_after']} " + fmt(s))
+            row = (f"| {part} | {t['clutter']} | {t['through']} | {t['lost_explained']} | {t['fall']} "
+                   f"| {t['lost_after']} " + fmt(s))
+            if kidnaps:
+                hit, n = kidnap_lost_within(kparts[part], t)
+                row += f" {hit}/{n} |"
+            print(row)
 
 
 def cmd_table(a):
@@ -341,6 +389,14 @@ def main():
     s = sub.add_parser("sweep")
     s.add_argument("--tune", required=True, help="buildings the thresholds are chosen on")
     s.add_argument("--both", action="store_true", help="print the holdout rows too")
+    s.add_argument("--clutter", default="0,0.3,0.5,0.7", help="clutter_share values (comma list)")
+    s.add_argument("--through", default="1.0",
+                   help="lost_through values (comma list; 1.0: off)")
+    s.add_argument("--others-fixed", action="store_true",
+                   help="lost_explained 0.35, lost_explained_fall 0.4, lost_after 3 only")
+    s.add_argument("--kidnap", action="append", default=[], metavar="LABEL=REPORT.json",
+                   help="a `track --kidnap SCAN` report (resetting off) whose kidnaps are "
+                        "replayed: Lost within 5 scans per part")
     s.add_argument("files", nargs="+")
     s.set_defaults(f=cmd_sweep)
     t = sub.add_parser("table")
