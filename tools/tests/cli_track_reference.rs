@@ -220,3 +220,49 @@ fn the_update_gate_carries_the_estimate_between_updates() {
         assert!(err.contains("--update-min"), "{bad}: {err}");
     }
 }
+
+/// The defaults (κ 64, the default quality thresholds) on the whole real-odometry log at nav2's
+/// odometry noise α 0.2, with the recovery on: the robot is never lost (largest error at an
+/// anchor under 0.35 m, the robustness target), no update reports `Lost` (nothing is wrong:
+/// the clutter near the laser at scans 415 and 834 is not a loss) and no free-space reset fires.
+#[test]
+fn the_defaults_keep_the_robot_on_real_odometry_at_nav2s_noise() {
+    // The field with its free space, as `field build --free-space` writes it.
+    let dir = std::env::temp_dir().join(format!("beamfield-real-odometry-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let with_free = dir.join("intel-fs.bin");
+    let mut blob = std::fs::read(field()).unwrap();
+    blob.extend(std::fs::read(repo().join("firmware/assets/intel-free-space.bin")).unwrap());
+    std::fs::write(&with_free, blob).unwrap();
+    let mut a = args("0");
+    let scans = a.iter().position(|s| s == "--scans").unwrap();
+    a.drain(scans..scans + 2);
+    let f = a.iter().position(|s| s == "--field").unwrap();
+    a[f + 1] = with_free.to_str().unwrap().to_string();
+    a.extend(["--odom-noise", "0.2", "--resetting"].map(String::from));
+    let v = run_json(bin().args(&a));
+    std::fs::remove_dir_all(&dir).unwrap();
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    for run in runs {
+        let m = &run["metrics"];
+        let max = m["max_trans_m"].as_f64().unwrap();
+        println!(
+            "seed {}: RMSE {:.4} m, largest {max:.3} m, resets {}",
+            run["seed"],
+            m["trans_rmse_m"].as_f64().unwrap(),
+            run["resets"]
+        );
+        assert_eq!(m["scored_scans"], anchors().len());
+        assert!(max < 0.35, "seed {}: largest error {max} m", run["seed"]);
+        let lost: Vec<u64> = run["per_scan"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|r| r["quality"] == "lost")
+            .map(|r| r["scan"].as_u64().unwrap())
+            .collect();
+        assert!(lost.is_empty(), "seed {}: Lost at {lost:?}", run["seed"]);
+        assert_eq!(run["resets"], 0, "seed {}", run["seed"]);
+    }
+}
