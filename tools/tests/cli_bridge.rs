@@ -416,3 +416,59 @@ fn a_second_signal_during_the_stop_exits_at_once() {
         "{stdout}"
     );
 }
+
+/// A device that sends one initialized estimate per device time in `times_us`, 20 ms apart,
+/// then closes the link.
+fn device_with_times(times_us: Vec<u64>) -> (String, std::thread::JoinHandle<()>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = listener.local_addr().unwrap().to_string();
+    let h = std::thread::spawn(move || {
+        let (mut s, _) = listener.accept().unwrap();
+        let mut enc = Encoder::new();
+        let mut w = [0u8; MAX_WIRE_LEN];
+        for (k, t) in times_us.into_iter().enumerate() {
+            let m = Message::Estimate(Estimate {
+                timestamp_us: t,
+                pose: Pose::new(k as f32, 0.0, 0.0),
+                flags: EstimateFlags::INITIALIZED,
+                ess: 100.0,
+                ..Estimate::default()
+            });
+            let len = enc.encode(&m, &mut w).unwrap();
+            if s.write_all(&w[..len]).is_err() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    });
+    (addr, h)
+}
+
+#[test]
+fn clock_device_goes_on_from_the_last_stamp_after_a_device_restart() {
+    // 20 estimates 30 s into the device's uptime, then it restarts: its clock is back at 0.
+    let times: Vec<u64> = (0..20u64)
+        .map(|k| 30_000_000 + k * 20_000)
+        .chain((0..20u64).map(|k| k * 20_000))
+        .collect();
+    let (addr, dev) = device_with_times(times);
+    let out = bridge(&addr, 79, &["--clock", "device"]);
+    dev.join().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(code(&out), Some(3), "{err}");
+    let r = report(&out);
+    assert_eq!(r["clock"]["restart"], 1, "{r}");
+    assert_eq!(r["clock"]["non_increasing_refused"], 0, "{r}");
+    // Held until 0.1 s of device time confirms: at 50 Hz five at the start and five while
+    // the restart was confirmed.
+    assert_eq!(r["clock"]["held_confirming"], 10, "{r}");
+    let superseded = r["amcl_pose_outbox"]["superseded"].as_u64().unwrap();
+    assert_eq!(r["poses"].as_u64().unwrap() + superseded, 30, "{r}");
+    // The restart's stamps went on after 30.38 s of device time, not from 0.
+    let shift = r["device_clock_shift_ns"].as_i64().unwrap();
+    assert!(shift > 30_380_000_000, "{r}");
+    assert!(
+        err.contains("the device's time went back") && err.contains("--clock device"),
+        "{err}"
+    );
+}
