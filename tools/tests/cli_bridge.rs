@@ -226,6 +226,12 @@ fn a_namespaced_params_file_needs_the_namespace_and_a_bad_namespace_is_a_usage_e
 /// the bridge prints it on stderr once it has handled every estimate before it), and keeps the
 /// link open until the bridge closes it.
 fn device_until_closed(n: u64) -> (String, std::thread::JoinHandle<()>) {
+    device_paced_until_closed(n, Duration::from_millis(20))
+}
+
+/// [`device_until_closed`] with estimates `pace` apart (zero: as fast as the socket takes
+/// them, in writes of up to 64 KiB).
+fn device_paced_until_closed(n: u64, pace: Duration) -> (String, std::thread::JoinHandle<()>) {
     use beamfield::link::{ErrorCode, ErrorReport};
     use std::io::Read;
     let listener = TcpListener::bind("127.0.0.1:0").unwrap();
@@ -234,19 +240,25 @@ fn device_until_closed(n: u64) -> (String, std::thread::JoinHandle<()>) {
         let (mut s, _) = listener.accept().unwrap();
         let mut enc = Encoder::new();
         let mut w = [0u8; MAX_WIRE_LEN];
+        let mut batch = Vec::new();
         for k in 0..n {
             let m = Message::Estimate(Estimate {
                 timestamp_us: 1_000_000 + k * 20_000,
-                pose: Pose::new(k as f32, 0.0, 0.0),
+                pose: Pose::new((k % 1000) as f32, 0.0, 0.0),
                 flags: EstimateFlags::INITIALIZED,
                 ess: 100.0,
                 ..Estimate::default()
             });
             let len = enc.encode(&m, &mut w).unwrap();
-            if s.write_all(&w[..len]).is_err() {
+            batch.extend_from_slice(&w[..len]);
+            if pace.is_zero() && batch.len() < 1 << 16 && k + 1 < n {
+                continue;
+            }
+            if s.write_all(&batch).is_err() {
                 return;
             }
-            std::thread::sleep(Duration::from_millis(20));
+            batch.clear();
+            std::thread::sleep(pace);
         }
         let mark = Message::Error(ErrorReport {
             code: ErrorCode::Refused,
@@ -296,9 +308,21 @@ fn send_signal(pid: u32, signal: &str) {
 /// Runs the bridge against [`device_until_closed`] with 5 estimates, sends `signal` once the
 /// bridge has handled them, and returns its exit code and JSON report.
 fn stopped_by(signal: &str, domain: u16) -> (Option<i32>, serde_json::Value) {
+    stopped_by_after(signal, domain, device_until_closed(5), |_| {})
+}
+
+/// Runs the bridge against `device` (one of [`device_paced_until_closed`]), calls `marked`
+/// with the bridge's process id once the bridge has handled the device's mark, sends `signal`,
+/// and returns the bridge's exit code and JSON report.
+fn stopped_by_after(
+    signal: &str,
+    domain: u16,
+    device: (String, std::thread::JoinHandle<()>),
+    at_mark: impl FnOnce(u32),
+) -> (Option<i32>, serde_json::Value) {
     use std::io::{BufRead, Read};
     use std::process::Stdio;
-    let (addr, dev) = device_until_closed(5);
+    let (addr, dev) = device;
     let mut child = bin()
         .args(["--json", "bridge", "--connect", &addr, "--loopback-only"])
         .args(["--domain-id", &domain.to_string()])
@@ -339,6 +363,7 @@ fn stopped_by(signal: &str, domain: u16) -> (Option<i32>, serde_json::Value) {
             err.join().unwrap()
         );
     }
+    at_mark(child.id());
     send_signal(child.id(), signal);
     let status = wait_exit(&mut child);
     let stderr = err.join().unwrap();
@@ -471,4 +496,53 @@ fn clock_device_goes_on_from_the_last_stamp_after_a_device_restart() {
         err.contains("the device's time went back") && err.contains("--clock device"),
         "{err}"
     );
+}
+
+/// The peak resident memory of process `pid` (`VmHWM` in /proc), bytes.
+fn peak_rss_bytes(pid: u32) -> u64 {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap();
+    let kib: u64 = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+        .unwrap_or_else(|| panic!("no VmHWM in {status}"));
+    kib * 1024
+}
+
+/// The bridge's memory bound (docs/nav2.md, "Queues and back-pressure").
+const MAX_BRIDGE_RSS_BYTES: u64 = 64 << 20;
+
+#[test]
+fn a_flood_without_a_subscriber_keeps_the_bridge_within_64_mib() {
+    // 1,000,000 estimates as fast as the socket takes them, nobody subscribed to amcl_pose.
+    // Before the bounded link queue and the outbox's interval a flood of 2,000,000 peaked at
+    // 1.16 GB, and at 252 MB with the bounded queue alone (the transient-local writer kept
+    // every sample, about 126 bytes each): either regression exceeds the bound here.
+    const FLOOD: u64 = 1_000_000;
+    let device = device_paced_until_closed(FLOOD, Duration::ZERO);
+    let mut peak = 0;
+    let (code, r) = stopped_by_after("TERM", 80, device, |pid| peak = peak_rss_bytes(pid));
+    eprintln!("peak RSS {peak} bytes; {r}");
+    assert_eq!(code, Some(0), "{r}");
+    assert!(
+        peak <= MAX_BRIDGE_RSS_BYTES,
+        "peak RSS {peak} bytes > {MAX_BRIDGE_RSS_BYTES}"
+    );
+    // Every estimate was read: published, superseded, dropped by the link queue, or not
+    // stamped by the clock model (the flood's device time runs far ahead of the computer's,
+    // and the stamps of a batch read at one instant are refused as not increasing).
+    let o = &r["amcl_pose_outbox"];
+    let c = &r["clock"];
+    let handled: u64 = [
+        &o["published"],
+        &o["superseded"],
+        &r["link_queue_dropped"],
+        &c["non_increasing_refused"],
+        &c["held_confirming"],
+        &c["outlier_dropped"],
+    ]
+    .iter()
+    .map(|v| v.as_u64().unwrap())
+    .sum();
+    assert_eq!(handled, FLOOD, "{r}");
 }
