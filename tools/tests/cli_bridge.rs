@@ -44,7 +44,12 @@ fn device(n: u64, hold: Duration) -> (String, std::thread::JoinHandle<()>) {
     (addr, h)
 }
 
+/// Held for reading by every bridge run, for writing by the flood: the flood's load would
+/// delay the others' loops enough to merge estimates (superseded, not published).
+static HEAVY: std::sync::RwLock<()> = std::sync::RwLock::new(());
+
 fn bridge(addr: &str, domain: u16, extra: &[&str]) -> Output {
+    let _shared = HEAVY.read().unwrap_or_else(|p| p.into_inner());
     bin()
         .args(["--json", "bridge", "--connect", addr, "--loopback-only"])
         .args(["--domain-id", &domain.to_string()])
@@ -308,6 +313,7 @@ fn send_signal(pid: u32, signal: &str) {
 /// Runs the bridge against [`device_until_closed`] with 5 estimates, sends `signal` once the
 /// bridge has handled them, and returns its exit code and JSON report.
 fn stopped_by(signal: &str, domain: u16) -> (Option<i32>, serde_json::Value) {
+    let _shared = HEAVY.read().unwrap_or_else(|p| p.into_inner());
     stopped_by_after(signal, domain, device_until_closed(5), |_| {})
 }
 
@@ -519,6 +525,7 @@ fn a_flood_without_a_subscriber_keeps_the_bridge_within_64_mib() {
     // 1.16 GB, and at 252 MB with the bounded queue alone (the transient-local writer kept
     // every sample, about 126 bytes each): either regression exceeds the bound here.
     const FLOOD: u64 = 1_000_000;
+    let _alone = HEAVY.write().unwrap_or_else(|p| p.into_inner());
     let device = device_paced_until_closed(FLOOD, Duration::ZERO);
     let mut peak = 0;
     let (code, r) = stopped_by_after("TERM", 80, device, |pid| peak = peak_rss_bytes(pid));
