@@ -1,4 +1,5 @@
-//! The device's clock (µs since it started) on the computer's clock, for `--clock host`.
+//! The device's clock (µs since it started) as stamps: on the computer's clock for `--clock host`,
+//! on its own for `--clock device`.
 //!
 //! [`HostClock`] maps device time to host time with an offset: the smallest
 //! `arrival − device time` over a sliding window of recent messages ([`WINDOW_NS`]), so that a
@@ -12,6 +13,10 @@
 //! stall, a jump of its clock). One that is followed by a message agreeing with the old offset
 //! is dropped as an outlier. A stamp that is not later than the last one given out is refused.
 //! Every cause is counted ([`ClockCounters`]).
+//!
+//! [`DeviceClock`] (`--clock device`) keeps the device's own time as the stamps and uses the
+//! computer's clock only to tell a restart or a jump from the passing of time; it then goes on
+//! from the last stamp instead of going back or jumping.
 
 use std::collections::VecDeque;
 
@@ -30,15 +35,17 @@ pub const CONFIRM_SPAN_NS: i128 = 100_000_000;
 /// The most offsets the window keeps (a flood of messages within [`WINDOW_NS`]).
 pub const WINDOW_CAPACITY: usize = 1024;
 
-/// What [`HostClock`] did, by cause. Each is a count of messages.
+/// What [`HostClock`] or [`DeviceClock`] did, by cause. Each is a count of messages.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub struct ClockCounters {
     /// Re-anchored: the device's clock jumped ahead of the computer's.
     pub jump_forward: u64,
     /// Re-anchored: the device's clock fell behind the computer's while still counting up (a
-    /// stall: the device paused, its clock with it).
+    /// stall: the device paused, its clock with it). [`HostClock`] only: [`DeviceClock`]
+    /// follows a stall.
     pub jump_back: u64,
-    /// Re-anchored: the device's time went back (the device restarted).
+    /// Re-anchored: the device's time went back (the device restarted, or its clock was set
+    /// back).
     pub restart: u64,
     /// Messages that disagreed with the clock and were not confirmed by the next ones.
     pub outlier_dropped: u64,
