@@ -4,7 +4,8 @@
 //! `/tf`, `initialpose` and nav2_amcl's two services to the device.
 //!
 //! - [`msg`]: the ROS 2 messages, laid out as CDR has them;
-//! - [`clock`]: the device's clock on the computer's (`--clock host`);
+//! - [`clock`]: the device's clock on the computer's (`--clock host`) or continued on its own
+//!   (`--clock device`);
 //! - [`lifecycle`]: the managed-node state machine nav2's lifecycle manager drives;
 //! - [`convert`]: link messages to ROS messages and back;
 //! - [`outbox`]: the newest message of a topic while the DDS writer's window is full;
@@ -12,7 +13,8 @@
 //! - [`repeat`]: the last map → odom transform re-sent while no estimate comes;
 //! - [`params`]: a nav2 params file's amcl section;
 //! - [`port`]: the link's bytes;
-//! - [`ros`]: the ROS 2 node.
+//! - [`ros`]: the ROS 2 node;
+//! - [`stop`]: SIGINT and SIGTERM, a requested stop.
 
 pub mod clock;
 pub mod convert;
@@ -25,8 +27,9 @@ pub mod queue;
 pub mod repeat;
 pub mod ros;
 mod run;
+pub mod stop;
 
 pub use run::{
-    parse_seconds, run, BridgeArgs, BridgeError, BridgeReport, ClockArg, Rmw, EXIT_CANNOT_START,
-    EXIT_LINK_LOST, EXIT_STOPPED, EXIT_USAGE, REFUSED_EXAMPLES,
+    parse_seconds, run, run_until, BridgeArgs, BridgeError, BridgeReport, ClockArg, Rmw,
+    EXIT_CANNOT_START, EXIT_LINK_LOST, EXIT_STOPPED, EXIT_USAGE, REFUSED_EXAMPLES,
 };

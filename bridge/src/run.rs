@@ -1,6 +1,6 @@
 //! The bridge's loop: the device's frames out to ROS 2, ROS 2's requests in to the device,
-//! until the link ends (or `--seconds`), then one report and an exit code
-//! ([`BridgeReport::exit_code`], [`BridgeError::exit_code`]).
+//! until the link ends (or `--seconds`, a lifecycle shutdown, SIGINT or SIGTERM), then one
+//! report and an exit code ([`BridgeReport::exit_code`], [`BridgeError::exit_code`]).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -10,7 +10,7 @@ use beamfield::link::{EstimateFlags, Heartbeat, Message};
 use ros2_client::ServiceMapping;
 use serde::Serialize;
 
-use crate::clock::{ClockCounters, HostClock};
+use crate::clock::{ClockCounters, DeviceClock, HostClock};
 use crate::convert::{self, Refused};
 use crate::lifecycle::State as LifecycleState;
 use crate::msg::{TfMessage, Time};
@@ -19,8 +19,10 @@ use crate::params::{Nav2Params, ParamsError};
 use crate::port::{now_ns, Endpoint, Incoming, Port, PortError};
 use crate::repeat::Repeater;
 use crate::ros::{NodeConfig, RosError, RosNode, ServiceCall};
+use crate::stop::Stop;
 
-/// Exit code: the bridge ran for `--seconds` and stopped.
+/// Exit code: the bridge stopped as asked: `--seconds` passed, a lifecycle `shutdown`, or
+/// SIGINT or SIGTERM (a requested stop is not a failure: a supervisor must not restart it).
 pub const EXIT_STOPPED: u8 = 0;
 /// Exit code: the bridge could not start (the link, the DDS participant, the params file).
 pub const EXIT_CANNOT_START: u8 = 1;
@@ -64,7 +66,9 @@ pub enum ClockArg {
     /// The computer's clock: device time plus the smallest offset over a sliding window,
     /// re-anchored on a confirmed jump (see `clock::HostClock`).
     Host,
-    /// The device's clock as it is (µs since it started): for replays with `use_sim_time`.
+    /// The device's clock (µs since it started), as it is until the device restarts or its
+    /// clock jumps, then continued without going back or jumping (see `clock::DeviceClock`):
+    /// for replays with `use_sim_time`.
     Device,
 }
 
@@ -147,8 +151,12 @@ pub struct BridgeReport {
     /// Link items dropped because the bridge's loop fell [`crate::queue::LINK_QUEUE_CAPACITY`]
     /// items behind the link (the oldest go first).
     pub link_queue_dropped: u64,
-    /// `--clock host`: what the clock model did (re-anchoring, refused stamps).
+    /// What the clock model did (re-anchoring, refused stamps), with `--clock host` or
+    /// `--clock device`.
     pub clock: Option<ClockCounters>,
+    /// `--clock device`: what was added to the device's time to make the last stamps, ns (0
+    /// unless the device restarted or its clock jumped; saturating at the i64 range).
+    pub device_clock_shift_ns: Option<i64>,
     /// `amcl_pose`'s outbox: published, retried on a full window, superseded (by a newer
     /// estimate while held back: a full window, or less than [`outbox::MIN_INTERVAL`] since the
     /// last), failed.
@@ -174,8 +182,8 @@ pub struct BridgeReport {
 }
 
 impl BridgeReport {
-    /// The exit code a supervisor sees: [`EXIT_STOPPED`] after `--seconds`, [`EXIT_LINK_LOST`]
-    /// when the link ended.
+    /// The exit code a supervisor sees: [`EXIT_STOPPED`] after `--seconds`, a lifecycle
+    /// shutdown, SIGINT or SIGTERM; [`EXIT_LINK_LOST`] when the link ended.
     pub fn exit_code(&self) -> u8 {
         self.exit_code
     }
@@ -307,6 +315,13 @@ impl std::fmt::Display for BridgeReport {
                 c.jump_forward, c.jump_back, c.restart, c.outlier_dropped, c.held_confirming, c.non_increasing_refused
             )?;
         }
+        if let Some(shift) = self.device_clock_shift_ns {
+            writeln!(
+                f,
+                "--clock device: stamps are the device's time plus {:.6} s",
+                shift as f64 * 1e-9
+            )?;
+        }
         for (name, o) in [
             ("amcl_pose", &self.amcl_pose_outbox),
             ("/tf", &self.tf_outbox),
@@ -381,12 +396,60 @@ impl BridgeError {
 /// How device time becomes stamps.
 enum Stamper {
     Host(HostClock),
-    Device,
+    Device(DeviceClock),
 }
 
-/// The device's time, µs, as a stamp on its own clock (saturating at [`Time::MAX`]).
-fn device_time(device_us: u64) -> Time {
-    Time::from_nanos(device_us.saturating_mul(1000))
+impl Stamper {
+    /// The stamp of a message stamped `device_us` on the device that arrived at `arrival_ns`;
+    /// `None` when the clock model holds or refuses it (counted by the model). A warning line
+    /// goes to stderr when the model re-anchors.
+    fn stamp(&mut self, device_us: u64, arrival_ns: u64) -> Option<Time> {
+        let before = self.counters();
+        let stamp = match self {
+            Self::Host(c) => c.stamp(device_us, arrival_ns).ok(),
+            Self::Device(c) => c.stamp(device_us, arrival_ns).ok(),
+        };
+        if let Some(w) = self.reanchor_warning(&before) {
+            eprintln!("bridge: {w}");
+        }
+        stamp
+    }
+
+    fn counters(&self) -> ClockCounters {
+        match self {
+            Self::Host(c) => c.counters,
+            Self::Device(c) => c.counters,
+        }
+    }
+
+    /// What to tell the user when the model re-anchored since its counters were `before`.
+    fn reanchor_warning(&self, before: &ClockCounters) -> Option<String> {
+        let now = self.counters();
+        let cause = if now.restart > before.restart {
+            "the device's time went back (a restart, or its clock set back)"
+        } else if now.jump_forward > before.jump_forward {
+            "the device's clock jumped ahead"
+        } else if now.jump_back > before.jump_back {
+            "the device's clock fell behind the computer's (a stall)"
+        } else {
+            return None;
+        };
+        Some(match self {
+            Self::Host(c) => format!(
+                "{cause}: --clock host re-anchored, device time + {:.6} s",
+                c.offset_ns().unwrap_or(0) as f64 * 1e-9
+            ),
+            Self::Device(c) => match c.last_reanchor {
+                Some(r) => format!(
+                    "{cause}, from {:.6} s to {:.6} s: --clock device stamps go on from the last one; they are now the device's time + {:.6} s",
+                    r.from_device_ns as f64 * 1e-9,
+                    r.to_device_ns as f64 * 1e-9,
+                    r.shift_ns as f64 * 1e-9
+                ),
+                None => format!("{cause}: --clock device re-anchored"),
+            },
+        })
+    }
 }
 
 /// The instant a frame that arrived at `arrival_ns` (ns since the Unix epoch, [`now_ns`])
@@ -425,10 +488,20 @@ fn normalized_namespace(ns: &str) -> Result<String, BridgeError> {
     Ok(format!("/{}", levels.join("/")))
 }
 
-/// Runs the bridge until the link ends or `args.seconds` pass; progress lines on stderr. An
-/// `Err` is a bridge that could not start; once running, it ends with a report whose
-/// [`BridgeReport::exit_code`] says why.
+/// Runs the bridge until the link ends, `args.seconds` pass or a lifecycle `shutdown`;
+/// progress lines on stderr. An `Err` is a bridge that could not start; once running, it ends
+/// with a report whose [`BridgeReport::exit_code`] says why. No signal stops it: see
+/// [`run_until`].
 pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
+    run_until(args, &Stop::new())
+}
+
+/// [`run`], which also stops when `stop` is requested ([`Stop::on_signals`]: SIGINT or
+/// SIGTERM; checked at least every 10 ms once the link is open). It then stops reading the
+/// link (frames already read but not yet handled are left), sends what the outboxes hold (at
+/// most one message per topic), and returns the report with `ended: signal (SIGINT)` (or
+/// `SIGTERM`) and [`EXIT_STOPPED`].
+pub fn run_until(args: &BridgeArgs, stop: &Stop) -> Result<BridgeReport, BridgeError> {
     let endpoint = match (&args.connect, &args.serial) {
         (Some(a), None) => Endpoint::Tcp(a.clone()),
         (None, Some(p)) => Endpoint::Serial {
@@ -494,7 +567,7 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     }
     let mut clock = match args.clock {
         ClockArg::Host => Stamper::Host(HostClock::new()),
-        ClockArg::Device => Stamper::Device,
+        ClockArg::Device => Stamper::Device(DeviceClock::new()),
     };
     let tolerance_ns = tolerance_ns(frames.transform_tolerance_s);
     let mut poses: Outbox<crate::msg::PoseWithCovarianceStamped> = Outbox::default();
@@ -515,6 +588,11 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
         r.exit_code = EXIT_LINK_LOST;
     };
     'run: loop {
+        if let Some(signal) = stop.requested() {
+            r.ended = format!("signal ({})", signal.name());
+            r.exit_code = EXIT_STOPPED;
+            break;
+        }
         if limit.is_some_and(|l| started.elapsed() >= l) {
             r.ended = "the time given with --seconds passed".into();
             r.exit_code = EXIT_STOPPED;
@@ -545,13 +623,9 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
                             r.not_active += 1;
                             continue;
                         }
-                        let stamp = match &mut clock {
-                            Stamper::Host(c) => match c.stamp(e.timestamp_us, arrival_ns) {
-                                Ok(t) => t,
-                                // Counted by the clock.
-                                Err(_) => continue,
-                            },
-                            Stamper::Device => device_time(e.timestamp_us),
+                        let Some(stamp) = clock.stamp(e.timestamp_us, arrival_ns) else {
+                            // Held or refused: counted by the clock model.
+                            continue;
                         };
                         poses
                             .offer(
@@ -727,8 +801,14 @@ pub fn run(args: &BridgeArgs) -> Result<BridgeReport, BridgeError> {
     r.lifecycle_state = state.label().into();
     r.amcl_pose_outbox = poses.counters;
     r.tf_outbox = transforms.counters;
-    if let Stamper::Host(c) = &clock {
-        r.clock = Some(c.counters);
+    r.clock = Some(clock.counters());
+    if let Stamper::Device(c) = &clock {
+        r.device_clock_shift_ns =
+            Some(i64::try_from(c.shift_ns()).unwrap_or(if c.shift_ns() < 0 {
+                i64::MIN
+            } else {
+                i64::MAX
+            }));
     }
     r.link_queue_dropped = port.dropped();
     r.frames_sent = port.sent;
@@ -808,7 +888,6 @@ mod tests {
         );
         // Never before the pose.
         assert_eq!(post_dated(Time::MAX, 1), Time::MAX);
-        assert_eq!(device_time(u64::MAX), Time::MAX);
     }
 
     #[test]

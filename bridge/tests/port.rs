@@ -91,3 +91,68 @@ fn garbled_and_cut_frames_are_counted_and_the_rest_arrives() {
     // The flipped bit, the cut frame with its neighbour, the noise.
     assert_eq!(refused, 3);
 }
+
+/// A serial port whose other end hangs up (a USB adapter unplugged): the bridge ends with the
+/// link-lost code and its report, so that a supervisor restarts it.
+#[test]
+fn a_serial_hang_up_ends_the_bridge_with_the_link_lost_code() {
+    use beamfield_bridge::{run, BridgeArgs, ClockArg, Rmw, EXIT_LINK_LOST};
+    use serialport::SerialPort;
+    use std::io::Read;
+
+    let (mut master, slave) = serialport::TTYPort::pair().unwrap();
+    let path = slave.name().unwrap();
+    // With no slave open the master reads a hang-up; once the bridge opens the port, it reads
+    // a timeout. The bridge sends nothing at start without a params file, so the hang-up
+    // below comes while it runs (during its start it would fail to start, exit 1).
+    drop(slave);
+    let args = BridgeArgs {
+        connect: None,
+        serial: Some(path),
+        baud: 230_400,
+        params: None,
+        namespace: "/".into(),
+        lifecycle: false,
+        domain_id: 67,
+        loopback_only: true,
+        rmw: Rmw::Fastrtps,
+        clock: ClockArg::Host,
+        seconds: Some(120.0),
+    };
+    let bridge = std::thread::spawn(move || run(&args));
+    let mut buf = [0u8; 256];
+    let started = Instant::now();
+    let mut opened = false;
+    while !opened && started.elapsed() < Duration::from_secs(60) {
+        match master.read(&mut buf) {
+            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => opened = true,
+            _ => std::thread::sleep(Duration::from_millis(5)),
+        }
+    }
+    assert!(opened, "the bridge never opened the port");
+    let mut enc = Encoder::new();
+    for k in 0..3u64 {
+        let e = Message::Estimate(Estimate {
+            timestamp_us: 1_000_000 + k * 100_000,
+            pose: Pose::new(1.0, 2.0, 0.0),
+            flags: EstimateFlags::INITIALIZED,
+            ess: 100.0,
+            ..Estimate::default()
+        });
+        master.write_all(&frame(&mut enc, &e)).unwrap();
+    }
+    // The other end goes away.
+    drop(master);
+    let report = bridge
+        .join()
+        .unwrap()
+        .unwrap_or_else(|e| panic!("the bridge stopped: {e}"));
+    eprintln!("{report}");
+    assert_eq!(report.exit_code(), EXIT_LINK_LOST, "{report}");
+    assert!(
+        report.ended.contains("reading the link failed")
+            || report.ended.contains("the device closed the link"),
+        "{}",
+        report.ended
+    );
+}

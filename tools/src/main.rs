@@ -125,11 +125,20 @@ fn main() -> ExitCode {
 }
 
 /// `beamfield bridge`: its report as every command's, and its own exit codes (docs/nav2.md,
-/// "Exit codes and the report's counters"): 0 stopped after `--seconds`, 1 could not start,
-/// 2 usage error, 3 link lost.
+/// "Exit codes and the report's counters"): 0 stopped as asked (`--seconds`, a lifecycle
+/// shutdown, SIGINT or SIGTERM), 1 could not start, 2 usage error, 3 link lost; 130 or 143 when
+/// a second SIGINT or SIGTERM ends it during its stop.
 #[cfg(feature = "bridge")]
 fn bridge(args: &beamfield_bridge::BridgeArgs, json: bool) -> ExitCode {
-    match beamfield_bridge::run(args) {
+    // SIGINT and SIGTERM stop it with its report (exit code 0); a second one exits at once.
+    let stop = match beamfield_bridge::stop::Stop::on_signals() {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("beamfield bridge: {e}");
+            return ExitCode::from(beamfield_bridge::EXIT_CANNOT_START);
+        }
+    };
+    match beamfield_bridge::run_until(args, &stop) {
         Ok(report) => {
             let code = report.exit_code();
             if finish("beamfield bridge", Ok::<_, String>(report), json) == ExitCode::SUCCESS {
