@@ -2,7 +2,7 @@
 //! emulator's UART, `cargo xtask robot --bridge-port`). A thread reads and decodes the frames
 //! (`beamfield::link::Decoder`) as they come; the caller sends frames with `beamfield`'s
 //! encoder. Between the reader and the caller is a bounded queue
-//! ([`LINK_QUEUE_CAPACITY`](crate::queue::LINK_QUEUE_CAPACITY) entries): when the caller falls
+//! ([`crate::queue::LINK_QUEUE_CAPACITY`] entries): when the caller falls
 //! behind, the oldest entries are dropped and counted ([`Port::dropped`]).
 
 use std::io::{Read, Write};
