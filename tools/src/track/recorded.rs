@@ -18,9 +18,17 @@ pub struct BagSummary {
     pub scans_used: usize,
     /// Scans and messages not used, by cause.
     pub skipped: BTreeMap<String, u64>,
-    /// The laser's mount on the base, from `/tf_static` (or centred, when it has none).
+    /// The laser's mount on the base frame: x, y (metres), yaw (radians), composed from
+    /// `/tf_static` (the identity when the scans are in the base frame).
     pub mount: [f32; 3],
+    /// Whether the odometry came from `/tf` (odom frame → base frame) because the bag has no
+    /// odometry topic.
+    pub odometry_from_tf: bool,
+    /// Whether the mount came from `/tf_static` (false: the scans are in the base frame).
     pub mount_from_tf: bool,
+    /// The scans' frame and the base frame the mount joins.
+    pub scan_frame: String,
+    pub base_frame: String,
     /// Beams per scan, first angle and step (radians), maximum range (metres).
     pub beams: usize,
     pub angle_min_rad: f32,
@@ -34,13 +42,15 @@ fn pose(p: Pose2) -> Pose {
 
 /// Loads a bag for a run: the scans of `topics.scan` mapped onto one [`BeamLayout`] (the
 /// first scan's angles; a scan with other angles is skipped), the laser's mount from
-/// `/tf_static` (`base_frame` → the scans' frame), `topics.odom` and the reference topic
+/// `/tf_static` (`base_frame` → the scans' frame, through any chain of transforms,
+/// [`Bag::frame_pose`]; the identity when the scans are in `base_frame`), `topics.odom` and the reference topic
 /// interpolated at each scan's stamp (a scan outside either is skipped). Ranges that are not
 /// finite or outside `[range_min, range_max]` become `range_max` (no reading).
 ///
 /// # Errors
 /// [`TrackError::Usage`] for a bag that cannot be read, a missing or mistyped topic, no
-/// reference topic, or scans no layout can hold.
+/// reference topic, scans no layout can hold, or scans whose frame `/tf_static` does not
+/// connect to `base_frame`.
 pub fn load_bag(
     field_bytes: Vec<u8>,
     bag_path: &Path,
@@ -65,17 +75,33 @@ pub fn load_bag(
             "--bag: scans of {n} beams; at most {MAX_BEAMS} fit a layout"
         )));
     }
-    let (mount, mount_from_tf) = match bag.mount(base_frame, &s0.frame_id) {
-        Some(m) => (
-            SensorMount {
-                x_m: m.x as f32,
-                y_m: m.y as f32,
-                yaw_rad: m.theta as f32,
-            },
-            true,
-        ),
-        None => (SensorMount::CENTERED, false),
+    let (base, frame) = (
+        base_frame.trim_start_matches('/'),
+        s0.frame_id.trim_start_matches('/'),
+    );
+    let m = bag.frame_pose(base, frame).ok_or_else(|| {
+        let mut known: Vec<String> = bag
+            .mounts
+            .iter()
+            .map(|m| format!("{} → {}", m.parent, m.child))
+            .collect();
+        known.dedup();
+        usage(format!(
+            "--bag: the scans' frame {frame:?} is not connected to the base frame {base:?} by /tf_static ({}); \
+             give --base-frame the robot's frame, or --base-frame {frame} to take the laser as the robot's centre",
+            if known.is_empty() {
+                "it has no transform".to_owned()
+            } else {
+                format!("its transforms: {}", known.join(", "))
+            }
+        ))
+    })?;
+    let mount = SensorMount {
+        x_m: m.x as f32,
+        y_m: m.y as f32,
+        yaw_rad: m.theta as f32,
     };
+    let mount_from_tf = base != frame;
     let range_max = s0.range_max;
     let layout =
         BeamLayout::<MAX_BEAMS>::uniform(s0.angle_min, s0.angle_increment, n, range_max, mount)
@@ -87,6 +113,9 @@ pub fn load_bag(
         skipped: bag.skipped.clone(),
         mount: [mount.x_m, mount.y_m, mount.yaw_rad],
         mount_from_tf,
+        odometry_from_tf: bag.odometry_from_tf,
+        scan_frame: frame.to_owned(),
+        base_frame: base.to_owned(),
         beams: n,
         angle_min_rad: s0.angle_min,
         angle_increment_rad: s0.angle_increment,

@@ -7,7 +7,7 @@ pub use report::{SeedRun, TrackReport};
 
 use crate::cmd::likelihood::LikelihoodArgs;
 use crate::cmd::scored_log::MAX_BEAMS;
-use crate::input::bag::Topics;
+use crate::input::bag::{OdomFromTf, Topics};
 use crate::track::{
     field_bytes, load_bag, load_with_max_range, read_odometry_file, read_reference_file, run_once,
     synthesize_odometry, usage, Init, Metrics, RunOptions, TrackError, Weighting, WheelPreset,
@@ -40,21 +40,28 @@ pub struct TrackArgs {
     /// reference scans only.
     #[arg(long, value_name = "FILE", requires = "log")]
     pub reference: Option<PathBuf>,
-    /// A ROS 2 bag (an .mcap file or a rosbag2 directory): scans, odometry and a reference
-    /// pose by topic; the odometry is the bag's (needs --reference-topic).
+    /// A ROS 2 bag: an .mcap file, a .db3 file (sqlite3, Humble's default storage), or a
+    /// rosbag2 directory of either; scans, odometry and a reference pose by topic; the
+    /// odometry is the bag's (needs --reference-topic).
     #[arg(long, conflicts_with = "odometry")]
     pub bag: Option<PathBuf>,
     /// The bag's sensor_msgs/LaserScan topic.
     #[arg(long, default_value = "/scan", requires = "bag")]
     pub scan_topic: String,
-    /// The bag's nav_msgs/Odometry topic.
+    /// The bag's nav_msgs/Odometry topic. A bag without it takes its odometry from /tf: the
+    /// transforms ODOM_FRAME → BASE_FRAME.
     #[arg(long, default_value = "/odom", requires = "bag")]
     pub odom_topic: String,
+    /// The odometry frame on /tf, for a bag with no odometry topic.
+    #[arg(long, default_value = "odom", requires = "bag")]
+    pub odom_frame: String,
     /// The bag's reference pose (PoseWithCovarianceStamped or PoseStamped: a recorded
     /// amcl_pose, ground truth) the errors are measured against.
     #[arg(long, requires = "bag")]
     pub reference_topic: Option<String>,
-    /// The robot's frame: the laser's mount is `/tf_static`'s BASE_FRAME → the scans' frame.
+    /// The robot's frame: the laser's mount is BASE_FRAME → the scans' frame, composed through
+    /// any chain of /tf_static transforms (e.g. base_footprint → base_link → laser); a scan
+    /// frame not connected to it is refused.
     #[arg(long, default_value = "base_link", requires = "bag")]
     pub base_frame: String,
     /// Recorded odometry for the log instead of synthesized: lines `index x y θ` (m, m, rad;
@@ -422,14 +429,23 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
                 scan: args.scan_topic.clone(),
                 odom: args.odom_topic.clone(),
                 reference: args.reference_topic.clone(),
+                odom_from_tf: Some(OdomFromTf {
+                    topic: "/tf".into(),
+                    odom_frame: args.odom_frame.clone(),
+                    base_frame: args.base_frame.clone(),
+                }),
                 ..Topics::default()
             };
             let (input, summary) = load_bag(bytes, path, &topics, &args.base_frame, lk)?;
-            (
-                input,
-                Some(summary),
-                format!("recorded ({})", args.odom_topic),
-            )
+            let source = if summary.odometry_from_tf {
+                format!(
+                    "recorded (/tf: {} → {}; the bag has no {})",
+                    args.odom_frame, args.base_frame, args.odom_topic
+                )
+            } else {
+                format!("recorded ({})", args.odom_topic)
+            };
+            (input, Some(summary), source)
         }
         _ => return Err(usage("give one of --log and --bag")),
     };

@@ -180,7 +180,7 @@ impl fmt::Display for TrackReport {
         if let Some(b) = &self.bag {
             writeln!(
                 f,
-                "bag: {} scans used, {} beams from {:.2}° every {:.3}°, max range {} m; laser mount ({}, {}, {:.2}°){}",
+                "bag: {} scans used, {} beams from {:.2}° every {:.3}°, max range {} m; laser mount ({}, {}, {:.2}°) {}",
                 b.scans_used,
                 b.beams,
                 b.angle_min_rad.to_degrees(),
@@ -189,7 +189,11 @@ impl fmt::Display for TrackReport {
                 b.mount[0],
                 b.mount[1],
                 b.mount[2].to_degrees(),
-                if b.mount_from_tf { " from /tf_static" } else { " (centred: none in /tf_static)" }
+                if b.mount_from_tf {
+                    format!("of {} on {} from /tf_static", b.scan_frame, b.base_frame)
+                } else {
+                    format!("(the scans are in the base frame {})", b.base_frame)
+                }
             )?;
             for (why, n) in &b.skipped {
                 writeln!(f, "bag: skipped {n}: {why}")?;

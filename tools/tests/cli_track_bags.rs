@@ -1,0 +1,173 @@
+//! `beamfield track --bag` on bags as ROS 2 users record them, each compared with the run on
+//! the MCAP bag `tools/tests/data/intel-bag` (the Intel log's first 120 scans, written by PyPI
+//! rosbags): the same recording stored as sqlite3 (`.db3`, Humble's default), the laser's mount
+//! as a chain of `/tf_static` transforms, the odometry only on `/tf`
+//! (`tools/tests/data/make_db3.py` wrote both with rosbags); a scan frame not connected to the
+//! base frame is refused.
+
+mod common;
+
+use common::bin;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn data() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+}
+
+fn field() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../firmware/assets/intel.bin")
+        .display()
+        .to_string()
+}
+
+/// `beamfield --json track` on `bag` with `extra` arguments: the exit code, the report
+/// (`Null` when stdout is not JSON) and stderr.
+fn track(bag: &Path, extra: &[&str]) -> (i32, Value, String) {
+    let out = bin()
+        .args(["--json", "track", "--field", &field(), "--bag"])
+        .arg(bag)
+        .args(["--reference-topic", "/ground_truth", "--seeds", "2"])
+        .args(extra)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        serde_json::from_slice(&out.stdout).unwrap_or(Value::Null),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The MCAP bag's run: the reference every other storage and layout is compared with.
+fn mcap_run() -> Value {
+    let (code, v, err) = track(&data().join("intel-bag"), &[]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(v["bag"]["scans_used"], 120);
+    assert_eq!(v["lost_runs"], 0);
+    v
+}
+
+/// The per-scan estimates and every error figure of two reports are the same, value for
+/// value.
+fn assert_same_runs(a: &Value, b: &Value) {
+    assert!(!a["runs"][0]["per_scan"].as_array().unwrap().is_empty());
+    assert_eq!(a["runs"], b["runs"]);
+    for k in [
+        "trans_rmse_cm_min_med_max",
+        "heading_rmse_deg_min_med_max",
+        "max_trans_m_min_med_max",
+        "within_10cm_2deg_pct_min_med_max",
+        "lost_runs",
+    ] {
+        assert_eq!(a[k], b[k], "{k}");
+    }
+}
+
+#[test]
+fn a_db3_bag_tracks_as_the_mcap_bag() {
+    let mcap = mcap_run();
+    for bag in [
+        data().join("intel-bag-db3"),
+        data().join("intel-bag-db3/intel-bag-db3.db3"),
+    ] {
+        let (code, v, err) = track(&bag, &[]);
+        assert_eq!(code, 0, "{}: {err}", bag.display());
+        // The whole report: estimates, errors, what the bag gave.
+        assert_eq!(v, mcap, "{}", bag.display());
+    }
+}
+
+#[test]
+fn a_damaged_db3_is_refused_with_its_line() {
+    let dir = std::env::temp_dir().join(format!("bf-track-db3-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = std::fs::read(data().join("intel-bag-db3/intel-bag-db3.db3")).unwrap();
+    let cases: [(&str, Vec<u8>, &str); 2] = [
+        ("junk.db3", b"hello".to_vec(), "is not an SQLite database"),
+        (
+            "half.db3",
+            good[..good.len() / 2].to_vec(),
+            "is damaged: database disk image is malformed",
+        ),
+    ];
+    for (name, bytes, want) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let (code, _, err) = track(&path, &[]);
+        assert_eq!(code, 1, "{name}: {err}");
+        assert!(err.contains(want), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_mount_through_a_chain_tracks_as_the_single_transform() {
+    let mcap = mcap_run();
+    let chain = data().join("intel-bag-chain");
+    let (code, v, err) = track(&chain, &["--base-frame", "base_footprint"]);
+    assert_eq!(code, 0, "{err}");
+    assert_same_runs(&v, &mcap);
+    assert_eq!(v["bag"]["mount"], mcap["bag"]["mount"]);
+    assert_eq!(v["bag"]["mount_from_tf"], true);
+    assert_eq!(v["odometry"], "recorded (/odom)");
+    // From base_link, the laser is make_db3.py's base_link → laser: (−0.25, 0.10 m, 0).
+    let (code, v, err) = track(&chain, &["--base-frame", "base_link", "--scans", "3"]);
+    assert_eq!(code, 0, "{err}");
+    let m: Vec<f64> = v["bag"]["mount"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert!(
+        (m[0] + 0.25).abs() < 1e-6 && (m[1] - 0.10).abs() < 1e-6 && m[2] == 0.0,
+        "{m:?}"
+    );
+}
+
+#[test]
+fn a_scan_frame_not_connected_to_the_base_frame_is_refused() {
+    let (code, v, err) = track(&data().join("intel-bag-chain"), &["--base-frame", "map"]);
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(v, Value::Null);
+    assert!(
+        err.contains(
+            r#"the scans' frame "laser" is not connected to the base frame "map" by /tf_static"#
+        ),
+        "{err}"
+    );
+    assert!(err.contains("base_footprint → base_link"), "{err}");
+}
+
+#[test]
+fn odometry_from_tf_tracks_as_the_odometry_topic() {
+    let mcap = mcap_run();
+    // The bag has /odom and /tf; naming an odometry topic it does not have leaves /tf.
+    let (code, v, err) = track(
+        &data().join("intel-bag-chain"),
+        &[
+            "--base-frame",
+            "base_footprint",
+            "--odom-topic",
+            "/wheel_odom",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_same_runs(&v, &mcap);
+    assert_eq!(
+        v["odometry"],
+        "recorded (/tf: odom → base_footprint; the bag has no /wheel_odom)"
+    );
+    // No odometry anywhere: the line names what /tf has.
+    let (code, _, err) = track(
+        &data().join("intel-bag-chain"),
+        &["--odom-topic", "/wheel_odom", "--odom-frame", "world"],
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("no topic /wheel_odom, and no transform world → base_link on /tf (there: odom → base_footprint)"),
+        "{err}"
+    );
+}
