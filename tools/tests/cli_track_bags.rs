@@ -3,7 +3,7 @@
 //! rosbags): the same recording stored as sqlite3 (`.db3`, Humble's default), the laser's mount
 //! as a chain of `/tf_static` transforms, the odometry only on `/tf`
 //! (`tools/tests/data/make_db3.py` wrote both with rosbags); a scan frame not connected to the
-//! base frame is refused.
+//! base frame is refused, and a lost run ends with its own exit code.
 
 mod common;
 
@@ -170,4 +170,30 @@ fn odometry_from_tf_tracks_as_the_odometry_topic() {
         err.contains("no topic /wheel_odom, and no transform world → base_link on /tf (there: odom → base_footprint)"),
         "{err}"
     );
+}
+
+#[test]
+fn a_lost_run_ends_with_its_exit_code_and_a_line() {
+    // The wrong base frame: imu_link, turned 34° from base_link (make_db3.py), so the scans
+    // are taken 34° off and the odometry is read in the wrong frame; every seed ends metres
+    // away from the reference.
+    let (code, v, err) = track(
+        &data().join("intel-bag-chain"),
+        &["--base-frame", "imu_link"],
+    );
+    assert_eq!(code, 3, "{err}");
+    assert_eq!(v["lost_runs"], 2, "the report is printed in full");
+    assert!(v["max_trans_m_min_med_max"][0].as_f64().unwrap() > 0.5);
+    assert!(
+        err.contains("LOST: 2 of 2 runs lost the robot (largest error over 0.5 m against the reference topic; seeds 1, 2)"),
+        "{err}"
+    );
+    // The help says so.
+    let help = bin().args(["track", "--help"]).output().unwrap();
+    assert!(String::from_utf8_lossy(&help.stdout)
+        .contains("3 with --bag, the report is printed but at least one run was lost"));
+    // Not lost: exit code 0 and no such line.
+    let (code, _, err) = track(&data().join("intel-bag"), &["--scans", "20"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("LOST"), "{err}");
 }

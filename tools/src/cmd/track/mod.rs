@@ -16,9 +16,19 @@ use crate::track::{
 use clap::Args;
 use std::path::PathBuf;
 
+/// The exit code of a `track --bag` run that was lost (its largest error against the reference
+/// passed 0.5 m in at least one seed); the report is printed in full before it.
+pub const EXIT_LOST: u8 = 3;
+
 /// `beamfield track`: run the localizer over a log or a bag.
 #[derive(Args, Debug, Clone)]
 #[command(group(clap::ArgGroup::new("recording").required(true).args(["log", "bag"])))]
+#[command(
+    after_help = "Exit codes: 0 the runs ended (with --bag: none was lost); 1 an error \
+    (the line on stderr says which); 3 with --bag, the report is printed but at least one run \
+    was lost: its largest error against the reference topic passed 0.5 m (a line on stderr \
+    says so). A lost run with --log is reported on stderr too, with exit code 0."
+)]
 pub struct TrackArgs {
     /// The distance-field blob (`beamfield field build`; `--init global` and recovery need it
     /// built with `--free-space`), or a nav2 map YAML, turned into a blob with its free space.

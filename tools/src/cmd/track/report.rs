@@ -104,6 +104,34 @@ pub struct TrackReport {
     pub bag: Option<crate::track::BagSummary>,
 }
 
+impl TrackReport {
+    /// A line saying that runs were lost (their largest error against the reference passed
+    /// 0.5 m), and which seeds; `None` when none was.
+    pub fn lost_line(&self) -> Option<String> {
+        if self.lost_runs == 0 {
+            return None;
+        }
+        let seeds: Vec<String> = self
+            .runs
+            .iter()
+            .filter(|r| r.metrics.lost)
+            .map(|r| r.seed.to_string())
+            .collect();
+        Some(format!(
+            "LOST: {} of {} runs lost the robot (largest error over 0.5 m against the {}; {} {})",
+            self.lost_runs,
+            self.runs.len(),
+            if self.bag.is_some() {
+                "reference topic"
+            } else {
+                "logged poses"
+            },
+            if seeds.len() == 1 { "seed" } else { "seeds" },
+            seeds.join(", ")
+        ))
+    }
+}
+
 impl fmt::Display for TrackReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let o = &self.options;
