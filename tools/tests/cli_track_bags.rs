@@ -1,9 +1,10 @@
 //! `beamfield track --bag` on bags as ROS 2 users record them, each compared with the run on
 //! the MCAP bag `tools/tests/data/intel-bag` (the Intel log's first 120 scans, written by PyPI
 //! rosbags): the same recording stored as sqlite3 (`.db3`, Humble's default), the laser's mount
-//! as a chain of `/tf_static` transforms, the odometry only on `/tf`
-//! (`tools/tests/data/make_db3.py` wrote both with rosbags); a scan frame not connected to the
-//! base frame is refused, and a lost run ends with its own exit code.
+//! as a chain of `/tf_static` transforms, the odometry only on `/tf`, scans whose beam count and
+//! angles change every revolution (`tools/tests/data/make_db3.py` wrote them with rosbags); a
+//! scan frame not connected to the base frame is refused, and a lost run ends with its own exit
+//! code.
 
 mod common;
 
@@ -196,4 +197,41 @@ fn a_lost_run_ends_with_its_exit_code_and_a_line() {
     let (code, _, err) = track(&data().join("intel-bag"), &["--scans", "20"]);
     assert_eq!(code, 0, "{err}");
     assert!(!err.contains("LOST"), "{err}");
+}
+
+#[test]
+fn scans_whose_angles_change_are_binned_onto_one_layout() {
+    let mcap = mcap_run();
+    let ld06 = data().join("intel-bag-ld06");
+    // Binned back onto the original layout, every beam gets its original range
+    // (make_db3.py), so the run is the MCAP bag's.
+    let (code, v, err) = track(&ld06, &["--scan-layout", "-90,1,180"]);
+    assert_eq!(code, 0, "{err}");
+    assert_same_runs(&v, &mcap);
+    assert_eq!(v["bag"]["rebinned"], 120);
+    assert_eq!(v["bag"]["beams"], 180);
+    assert_eq!(v["bag"]["angle_min_rad"], mcap["bag"]["angle_min_rad"]);
+    assert_eq!(
+        v["bag"]["angle_increment_rad"],
+        mcap["bag"]["angle_increment_rad"]
+    );
+    // Without a layout: none is skipped, each is binned onto the layout covering them
+    // (make_db3.py's steps are 0.69° to 0.90°: the largest sets it), and the robot is tracked.
+    let (code, v, err) = track(&ld06, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(v["bag"]["scans_used"], 120);
+    assert_eq!(v["bag"]["rebinned"], 120);
+    assert_eq!(v["bag"]["skipped"], serde_json::json!({}));
+    let step = v["bag"]["angle_increment_rad"]
+        .as_f64()
+        .unwrap()
+        .to_degrees();
+    assert!((0.85..=0.91).contains(&step), "{step}");
+    assert_eq!(v["lost_runs"], 0);
+    let rmse = v["trans_rmse_cm_min_med_max"][2].as_f64().unwrap();
+    assert!(rmse < 6.0, "{rmse} cm");
+    // A layout that is not one is refused.
+    let (code, _, err) = track(&ld06, &["--scan-layout", "0,2,200"]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("spanning at most 360°"), "{err}");
 }

@@ -10,8 +10,8 @@ use crate::cmd::scored_log::MAX_BEAMS;
 use crate::input::bag::{OdomFromTf, Topics};
 use crate::track::{
     field_bytes, load_bag, load_with_max_range, read_odometry_file, read_reference_file, run_once,
-    synthesize_odometry, usage, Init, Metrics, RunOptions, TrackError, Weighting, WheelPreset,
-    MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
+    synthesize_odometry, usage, Init, Metrics, RunOptions, ScanLayout, TrackError, Weighting,
+    WheelPreset, MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
 };
 use clap::Args;
 use std::path::PathBuf;
@@ -62,6 +62,19 @@ pub struct TrackArgs {
     /// transforms ODOM_FRAME → BASE_FRAME.
     #[arg(long, default_value = "/odom", requires = "bag")]
     pub odom_topic: String,
+    /// Bin every scan onto this layout: the first beam's bearing and the step in degrees
+    /// (counter-clockwise in the laser's frame) and the beam count, e.g. "-180,1,360". Each
+    /// reading goes to the beam nearest to its bearing within half a step (the nearest of
+    /// several stays), as the device bins a LiDAR's revolution. Without it, scans whose angles
+    /// change from one to the next (an LD06 driver's) are binned onto the layout covering
+    /// them: the median first and last bearings at the largest step.
+    #[arg(
+        long,
+        value_name = "MIN_DEG,STEP_DEG,BEAMS",
+        allow_hyphen_values = true,
+        requires = "bag"
+    )]
+    pub scan_layout: Option<String>,
     /// The odometry frame on /tf, for a bag with no odometry topic.
     #[arg(long, default_value = "odom", requires = "bag")]
     pub odom_frame: String,
@@ -244,6 +257,40 @@ fn parse_list(text: &str, what: &str, n: usize) -> Result<Vec<f32>, TrackError> 
         k if k == n => Ok(v),
         _ => Err(usage(format!("{what} {text:?}: expected {n} numbers"))),
     }
+}
+
+/// `--scan-layout MIN_DEG,STEP_DEG,BEAMS`.
+fn scan_layout(text: &str) -> Result<ScanLayout, TrackError> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            usage(format!(
+                "--scan-layout {text:?}: expected numbers separated by commas"
+            ))
+        })?;
+    if v.len() != 3 {
+        return Err(usage(format!("--scan-layout {text:?}: expected 3 numbers")));
+    }
+    let beams = v[2];
+    let ok = v[0].is_finite()
+        && v[1].is_finite()
+        && v[1] > 0.0
+        && beams >= 1.0
+        && beams <= MAX_BEAMS as f64
+        && beams.fract() == 0.0
+        && v[1] * beams <= 360.0 + 1e-3;
+    if !ok {
+        return Err(usage(format!(
+            "--scan-layout {text:?}: a first bearing (degrees), a step (degrees, > 0) and 1 to {MAX_BEAMS} beams spanning at most 360°"
+        )));
+    }
+    Ok(ScanLayout {
+        angle_min_rad: v[0].to_radians(),
+        increment_rad: v[1].to_radians(),
+        beams: beams as usize,
+    })
 }
 
 /// The options of `args` for seed `seed`.
@@ -446,7 +493,11 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
                 }),
                 ..Topics::default()
             };
-            let (input, summary) = load_bag(bytes, path, &topics, &args.base_frame, lk)?;
+            let layout = match &args.scan_layout {
+                Some(text) => Some(scan_layout(text)?),
+                None => None,
+            };
+            let (input, summary) = load_bag(bytes, path, &topics, &args.base_frame, lk, layout)?;
             let source = if summary.odometry_from_tf {
                 format!(
                     "recorded (/tf: {} → {}; the bag has no {})",

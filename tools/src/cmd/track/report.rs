@@ -223,6 +223,13 @@ impl fmt::Display for TrackReport {
                     format!("(the scans are in the base frame {})", b.base_frame)
                 }
             )?;
+            if b.rebinned > 0 {
+                writeln!(
+                    f,
+                    "bag: {} scans binned onto that layout (nearest beam within half a step)",
+                    b.rebinned
+                )?;
+            }
             for (why, n) in &b.skipped {
                 writeln!(f, "bag: skipped {n}: {why}")?;
             }
