@@ -184,6 +184,15 @@ fn a_lost_run_ends_with_its_exit_code_and_a_line() {
     );
     assert_eq!(code, 3, "{err}");
     assert_eq!(v["lost_runs"], 2, "the report is printed in full");
+    // The mount is the laser's pose in imu_link, composed backwards through base_link. By
+    // hand from make_db3.py's transforms: the laser is (−0.30, 0.10) from the imu in
+    // base_link's axes, seen from the imu turned 0.6 rad.
+    let (s, c) = 0.6f64.sin_cos();
+    let want = [c * -0.30 + s * 0.10, -s * -0.30 + c * 0.10, -0.6];
+    for (k, w) in want.iter().enumerate() {
+        let got = v["bag"]["mount"][k].as_f64().unwrap();
+        assert!((got - w).abs() < 1e-6, "mount[{k}] {got}, want {w}");
+    }
     assert!(v["max_trans_m_min_med_max"][0].as_f64().unwrap() > 0.5);
     assert!(
         err.contains("LOST: 2 of 2 runs lost the robot (largest error over 0.5 m against the reference topic; seeds 1, 2)"),
