@@ -73,11 +73,13 @@ fn open(file: &Path, limit: u32) -> Result<Connection, BagError> {
     {
         use std::io::Read;
         let mut f = std::fs::File::open(file).map_err(|e| BagError::Io(file.into(), e))?;
-        let n = f
-            .read(&mut head)
-            .map_err(|e| BagError::Io(file.into(), e))?;
-        if n < head.len() || &head != SQLITE_HEADER {
-            return Err(BagError::NotSqlite(file.into()));
+        match f.read_exact(&mut head) {
+            Ok(()) if &head == SQLITE_HEADER => {}
+            Ok(()) => return Err(BagError::NotSqlite(file.into())),
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+                return Err(BagError::NotSqlite(file.into()))
+            }
+            Err(e) => return Err(BagError::Io(file.into(), e)),
         }
     }
     let err = db_error(file, limit);
