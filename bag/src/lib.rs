@@ -1,5 +1,6 @@
 //! ROS 2 bags in for beamfield's host tools (`beamfield track --bag`, `cargo xtask robot --bag`): the scans, odometry, a reference pose and the laser's mount from an MCAP file
-//! (what `ros2 bag record` writes since Iron), by topic, with each message's CDR decoded here
+//! (what `ros2 bag record` writes since Iron) or an sqlite3 `.db3` file (its default up to
+//! Humble, [`sqlite`]), by topic, with each message's CDR decoded here
 //! ([`cdr`]): `sensor_msgs/msg/LaserScan`, `nav_msgs/msg/Odometry`,
 //! `geometry_msgs/msg/PoseWithCovarianceStamped` or `PoseStamped`, `tf2_msgs/msg/TFMessage`.
 //!
@@ -9,10 +10,12 @@
 //!
 //! Nothing in a file is trusted before it is checked: a bag file must be a regular file of at
 //! most [`MAX_BAG_FILE_BYTES`] ([`read_bounded`]), and every record, chunk and CRC of it is
-//! checked by [`guard::check`] before the `mcap` crate parses it.
+//! checked by [`guard::check`] before the `mcap` crate parses it; a `.db3` file is opened
+//! read-only with the limits [`sqlite`] lists.
 
 pub mod cdr;
 pub mod guard;
+pub mod sqlite;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -55,6 +58,16 @@ pub struct Mount {
     pub pose: Pose2,
 }
 
+/// Odometry from the transforms of a `tf2_msgs/TFMessage` topic (`/tf`): the pose of
+/// `base_frame` in `odom_frame`, at each transform's header stamp, as a robot's odometry node
+/// broadcasts it when it publishes no `nav_msgs/Odometry`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OdomFromTf {
+    pub topic: String,
+    pub odom_frame: String,
+    pub base_frame: String,
+}
+
 /// Which topics to read.
 #[derive(Clone, Debug)]
 pub struct Topics {
@@ -63,6 +76,9 @@ pub struct Topics {
     /// A reference pose to compare with (a recorded `amcl_pose`, ground truth), if any.
     pub reference: Option<String>,
     pub tf_static: String,
+    /// Where the odometry comes from when the bag has no `odom` topic (none: the topic must
+    /// be there).
+    pub odom_from_tf: Option<OdomFromTf>,
 }
 
 impl Default for Topics {
@@ -72,6 +88,7 @@ impl Default for Topics {
             odom: "/odom".into(),
             reference: None,
             tf_static: "/tf_static".into(),
+            odom_from_tf: None,
         }
     }
 }
@@ -83,11 +100,25 @@ pub struct Bag {
     pub odometry: Vec<Stamped<Pose2>>,
     pub reference: Vec<Stamped<Pose2>>,
     pub mounts: Vec<Mount>,
+    /// Whether [`Bag::odometry`] came from `/tf` ([`Topics::odom_from_tf`]) because the bag
+    /// has no odometry topic.
+    pub odometry_from_tf: bool,
+    /// The odometry found on `/tf` while the bag is read; moved into `odometry` at the end
+    /// when the odometry topic is missing.
+    tf_odometry: Vec<Stamped<Pose2>>,
+    /// Where odometry on `/tf` is looked for.
+    odom_tf: Option<OdomFromTf>,
+    /// Parent → child of every transform seen on `/tf` (for [`BagError::NoOdometry`]; at most
+    /// [`MAX_TF_PAIRS_LISTED`]).
+    tf_pairs: std::collections::BTreeSet<String>,
     /// Messages not used, by cause.
     pub skipped: BTreeMap<String, u64>,
     /// Every topic of the bag: its type and message count.
     pub topics: BTreeMap<String, (String, u64)>,
 }
+
+/// Most distinct parent → child pairs of `/tf` kept to name in [`BagError::NoOdometry`].
+pub const MAX_TF_PAIRS_LISTED: usize = 64;
 
 /// Largest MCAP file read, bytes: 2 GiB. rosbag2 splits a recording into files of a size the
 /// user chooses; a file is read whole into memory.
@@ -108,12 +139,40 @@ pub enum BagError {
     },
     /// The file's records, chunks or CRCs are damaged ([`guard::check`]).
     Corrupt(PathBuf, guard::Corrupt),
-    /// A directory with no `.mcap` file.
-    NoMcap(PathBuf),
+    /// A directory with no `.mcap` and no `.db3` file.
+    NoBagFile(PathBuf),
+    /// A directory with both `.mcap` and `.db3` files: two recordings, or one converted beside
+    /// the other.
+    MixedStorage(PathBuf),
     Mcap(PathBuf, String),
+    /// A `.db3` file that does not start with SQLite's header ([`sqlite::SQLITE_HEADER`]).
+    NotSqlite(PathBuf),
+    /// An SQLite database that is not a rosbag2 bag: a table or column missing (`what`).
+    Db3Schema {
+        path: PathBuf,
+        what: String,
+    },
+    /// An SQLite database that SQLite finds damaged (SQLite's message).
+    Db3Damaged(PathBuf, String),
+    /// A value in a `.db3` file longer than `limit` bytes ([`sqlite::MAX_DB3_MESSAGE_BYTES`]).
+    Db3TooLong {
+        path: PathBuf,
+        limit: u32,
+    },
+    /// Any other failure of SQLite on a `.db3` file (SQLite's message).
+    Db3(PathBuf, String),
     /// A topic asked for that the bag does not have.
     MissingTopic {
         topic: String,
+        available: Vec<String>,
+    },
+    /// No odometry topic, and no transform of the odometry frame to the base frame on `/tf`.
+    NoOdometry {
+        topic: String,
+        /// Where the odometry was looked for on `/tf` (boxed: it keeps the error small).
+        tf: Box<OdomFromTf>,
+        /// Parent → child of every transform seen on the tf topic.
+        tf_pairs: Vec<String>,
         available: Vec<String>,
     },
     /// A topic of a type the reader cannot use for it.
@@ -136,17 +195,61 @@ impl std::fmt::Display for BagError {
             Self::NotAFile(p) => write!(f, "{} is not a regular file", p.display()),
             Self::TooLarge { path, bytes, limit } => write!(
                 f,
-                "{} is larger than {limit} bytes, the limit for an MCAP file ({bytes} bytes seen)",
+                "{} is larger than {limit} bytes, the limit for a bag file ({bytes} bytes seen)",
                 path.display()
             ),
             Self::Corrupt(p, e) => write!(f, "{} is damaged: {e}", p.display()),
-            Self::NoMcap(p) => write!(f, "{} holds no .mcap file", p.display()),
+            Self::NoBagFile(p) => write!(f, "{} holds no .mcap and no .db3 file", p.display()),
+            Self::MixedStorage(p) => write!(
+                f,
+                "{} holds both .mcap and .db3 files; give the file to read",
+                p.display()
+            ),
             Self::Mcap(p, e) => write!(f, "{} is not a readable MCAP file: {e}", p.display()),
+            Self::NotSqlite(p) => write!(
+                f,
+                "{} is not an SQLite database (no SQLite header), so not a .db3 bag",
+                p.display()
+            ),
+            Self::Db3Schema { path, what } => write!(
+                f,
+                "{} is an SQLite database but not a rosbag2 bag: {what}",
+                path.display()
+            ),
+            Self::Db3Damaged(p, e) => write!(f, "{} is damaged: {e}", p.display()),
+            Self::Db3TooLong { path, limit } => write!(
+                f,
+                "{} holds a value longer than {limit} bytes, the limit for a message",
+                path.display()
+            ),
+            Self::Db3(p, e) => write!(f, "{} is not a readable .db3 bag: {e}", p.display()),
             Self::MissingTopic { topic, available } => write!(
                 f,
                 "the bag has no topic {topic}; it has {}",
                 if available.is_empty() {
                     "none".into()
+                } else {
+                    available.join(", ")
+                }
+            ),
+            Self::NoOdometry {
+                topic,
+                tf,
+                tf_pairs,
+                available,
+            } => write!(
+                f,
+                "the bag has no odometry: no topic {topic}, and no transform {} → {} on {} ({}); it has {}",
+                tf.odom_frame,
+                tf.base_frame,
+                tf.topic,
+                if tf_pairs.is_empty() {
+                    "none there".to_owned()
+                } else {
+                    format!("there: {}", tf_pairs.join(", "))
+                },
+                if available.is_empty() {
+                    "no topic".into()
                 } else {
                     available.join(", ")
                 }
@@ -162,6 +265,25 @@ impl std::fmt::Display for BagError {
 }
 
 impl std::error::Error for BagError {}
+
+/// Checks that `path` is a regular file of at most `limit` bytes, before it is opened.
+///
+/// # Errors
+/// [`BagError::Io`], [`BagError::NotAFile`], [`BagError::TooLarge`].
+pub fn check_regular_file(path: &Path, limit: u64) -> Result<(), BagError> {
+    let meta = std::fs::metadata(path).map_err(|e| BagError::Io(path.to_path_buf(), e))?;
+    if !meta.is_file() {
+        return Err(BagError::NotAFile(path.to_path_buf()));
+    }
+    if meta.len() > limit {
+        return Err(BagError::TooLarge {
+            path: path.to_path_buf(),
+            bytes: meta.len(),
+            limit,
+        });
+    }
+    Ok(())
+}
 
 /// Reads a whole regular file of at most `limit` bytes. A device, FIFO or directory is refused
 /// before it is opened ([`BagError::NotAFile`]); a file whose size is over the limit is refused
@@ -197,21 +319,65 @@ pub fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>, BagError> {
     Ok(out)
 }
 
-/// The `.mcap` files of a bag: the file itself, or those of a rosbag2 directory, sorted.
-fn mcap_files(path: &Path) -> Result<Vec<PathBuf>, BagError> {
-    if !path.is_dir() {
-        return Ok(vec![path.to_path_buf()]);
+/// How a bag file is stored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Storage {
+    Mcap,
+    Sqlite3,
+}
+
+/// A file's storage: sqlite3 when it starts with SQLite's header or is named `.db3`
+/// (refused later if it is not SQLite), MCAP otherwise. Only a regular file is opened to look
+/// (a FIFO or device is refused later by the reader of either storage, before it is opened).
+fn storage_of(path: &Path) -> Storage {
+    let mut head = [0u8; 16];
+    let is_sqlite = std::fs::metadata(path).is_ok_and(|m| m.is_file())
+        && std::fs::File::open(path)
+            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+            .is_ok()
+        && &head == sqlite::SQLITE_HEADER;
+    if is_sqlite || path.extension().is_some_and(|x| x == "db3") {
+        Storage::Sqlite3
+    } else {
+        Storage::Mcap
     }
-    let mut files: Vec<PathBuf> = std::fs::read_dir(path)
+}
+
+/// The sort key of a split bag's file: its name with a trailing number compared as a number
+/// (rosbag2 names the files of a split recording `NAME_0`, `NAME_1`, … `NAME_10`).
+fn split_order(p: &Path) -> (String, u64, String) {
+    let stem = p
+        .file_stem()
+        .map_or(String::new(), |s| s.to_string_lossy().into());
+    let digits = stem.len() - stem.trim_end_matches(|c: char| c.is_ascii_digit()).len();
+    let (head, num) = stem.split_at(stem.len() - digits);
+    (head.to_owned(), num.parse().unwrap_or(0), stem.clone())
+}
+
+/// The files of a bag and their storage: the file itself, or the `.mcap` or `.db3` files of a
+/// rosbag2 directory, in the order of a split recording's numbers.
+fn bag_files(path: &Path) -> Result<Vec<(PathBuf, Storage)>, BagError> {
+    if !path.is_dir() {
+        return Ok(vec![(path.to_path_buf(), storage_of(path))]);
+    }
+    let mut files: Vec<(PathBuf, Storage)> = std::fs::read_dir(path)
         .map_err(|e| BagError::Io(path.into(), e))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "mcap"))
+        .filter_map(|p| match p.extension().and_then(|x| x.to_str()) {
+            Some("mcap") => Some((p, Storage::Mcap)),
+            Some("db3") => Some((p, Storage::Sqlite3)),
+            _ => None,
+        })
         .collect();
-    files.sort();
-    if files.is_empty() {
-        return Err(BagError::NoMcap(path.into()));
+    files.sort_by_cached_key(|(p, _)| split_order(p));
+    match (
+        files.iter().any(|(_, s)| *s == Storage::Mcap),
+        files.iter().any(|(_, s)| *s == Storage::Sqlite3),
+    ) {
+        (false, false) => Err(BagError::NoBagFile(path.into())),
+        (true, true) => Err(BagError::MixedStorage(path.into())),
+        _ => Ok(files),
     }
-    Ok(files)
 }
 
 fn yaw(x: f64, y: f64, z: f64, w: f64) -> Option<f64> {
@@ -295,21 +461,36 @@ pub fn decode_stamped_pose(data: &[u8]) -> Result<(u64, Option<Pose2>), CdrError
 /// # Errors
 /// [`CdrError`] for a message that is not one.
 pub fn decode_tf(data: &[u8]) -> Result<Vec<Mount>, CdrError> {
+    Ok(decode_tf_stamped(data)?
+        .into_iter()
+        .map(|m| m.value)
+        .collect())
+}
+
+/// Decodes a `tf2_msgs/msg/TFMessage` into its planar transforms (those with a finite pose),
+/// each with its header stamp (ns).
+///
+/// # Errors
+/// [`CdrError`] for a message that is not one.
+pub fn decode_tf_stamped(data: &[u8]) -> Result<Vec<Stamped<Mount>>, CdrError> {
     let mut c = Cdr::new(data)?;
     // A TransformStamped is at least a stamp, two strings and seven f64.
     let n = c.count(8 + 8 + 56)?;
     let mut out = Vec::with_capacity(n);
     for _ in 0..n {
-        let _t = stamp(&mut c)?;
+        let t = stamp(&mut c)?;
         let parent = c.string()?;
         let child = c.string()?;
         let (x, y, _z) = (c.f64()?, c.f64()?, c.f64()?);
         let (qx, qy, qz, qw) = (c.f64()?, c.f64()?, c.f64()?, c.f64()?);
         if let Some(theta) = yaw(qx, qy, qz, qw).filter(|_| x.is_finite() && y.is_finite()) {
-            out.push(Mount {
-                parent: parent.trim_start_matches('/').to_owned(),
-                child: child.trim_start_matches('/').to_owned(),
-                pose: Pose2 { x, y, theta },
+            out.push(Stamped {
+                stamp_ns: t,
+                value: Mount {
+                    parent: parent.trim_start_matches('/').to_owned(),
+                    child: child.trim_start_matches('/').to_owned(),
+                    pose: Pose2 { x, y, theta },
+                },
             });
         }
     }
@@ -323,6 +504,8 @@ enum Role {
     Odom,
     Reference,
     Tf,
+    /// `/tf`, for odometry when the odometry topic is missing.
+    TfOdom,
 }
 
 impl Role {
@@ -334,7 +517,7 @@ impl Role {
                 schema,
                 "geometry_msgs/msg/PoseWithCovarianceStamped" | "geometry_msgs/msg/PoseStamped"
             ),
-            Self::Tf => schema == "tf2_msgs/msg/TFMessage",
+            Self::Tf | Self::TfOdom => schema == "tf2_msgs/msg/TFMessage",
         }
     }
 
@@ -343,7 +526,7 @@ impl Role {
             Self::Scan => "sensor_msgs/msg/LaserScan",
             Self::Odom => "nav_msgs/msg/Odometry",
             Self::Reference => "geometry_msgs/msg/PoseWithCovarianceStamped or PoseStamped",
-            Self::Tf => "tf2_msgs/msg/TFMessage",
+            Self::Tf | Self::TfOdom => "tf2_msgs/msg/TFMessage",
         }
     }
 }
@@ -358,22 +541,44 @@ fn roles(topics: &Topics) -> Vec<(&str, Role)> {
     if let Some(r) = &topics.reference {
         roles.push((r.as_str(), Role::Reference));
     }
+    if let Some(t) = &topics.odom_from_tf {
+        roles.push((t.topic.as_str(), Role::TfOdom));
+    }
     roles
 }
 
 impl Bag {
-    /// Reads the topics of `topics` from a bag (an `.mcap` file or a rosbag2 directory).
-    /// `/tf_static` is optional; the scan and odometry topics and a reference topic asked for
-    /// must be there.
+    /// Reads the topics of `topics` from a bag: an `.mcap` file, a `.db3` file (an SQLite
+    /// file is known by its header, whatever its name), or a rosbag2 directory of either
+    /// (its files in the order of their split numbers; `metadata.yaml` is not needed).
+    /// `/tf_static` is optional; the scan topic and a reference topic asked for must be there,
+    /// and the odometry topic unless [`Topics::odom_from_tf`] finds odometry on `/tf` (then
+    /// [`Bag::odometry_from_tf`]). Messages are taken per topic in the order the storage plays them (an
+    /// MCAP file's order; a `.db3`'s receive timestamps), so the same recording in either
+    /// storage gives the same bag.
+    ///
+    /// # Errors
+    /// [`BagError`]: a file that cannot be read, is not a bag or is damaged; a topic missing,
+    /// of the wrong type or not CDR; no odometry ([`BagError::NoOdometry`]).
     pub fn read(path: &Path, topics: &Topics) -> Result<Self, BagError> {
-        let mut bag = Bag::default();
+        let mut bag = Bag {
+            odom_tf: topics.odom_from_tf.clone(),
+            ..Bag::default()
+        };
         let roles = roles(topics);
         let mut last: BTreeMap<&str, u64> = BTreeMap::new();
-        for file in mcap_files(path)? {
-            let bytes = read_bounded(&file, MAX_BAG_FILE_BYTES)?;
-            bag.add_mcap(&file, &bytes, &roles, &mut last)?;
+        for (file, storage) in bag_files(path)? {
+            match storage {
+                Storage::Mcap => {
+                    let bytes = read_bounded(&file, MAX_BAG_FILE_BYTES)?;
+                    bag.add_mcap(&file, &bytes, &roles, &mut last)?;
+                }
+                Storage::Sqlite3 => {
+                    bag.add_db3(&file, &roles, &mut last, sqlite::MAX_DB3_MESSAGE_BYTES)?;
+                }
+            }
         }
-        bag.check_topics(&roles)?;
+        bag.finish(&roles)?;
         Ok(bag)
     }
 
@@ -382,10 +587,13 @@ impl Bag {
     /// # Errors
     /// As [`Bag::read`], but for a missing file.
     pub fn from_mcap(name: &Path, bytes: &[u8], topics: &Topics) -> Result<Self, BagError> {
-        let mut bag = Bag::default();
+        let mut bag = Bag {
+            odom_tf: topics.odom_from_tf.clone(),
+            ..Bag::default()
+        };
         let roles = roles(topics);
         bag.add_mcap(name, bytes, &roles, &mut BTreeMap::new())?;
-        bag.check_topics(&roles)?;
+        bag.finish(&roles)?;
         Ok(bag)
     }
 
@@ -432,20 +640,41 @@ impl Bag {
         Ok(())
     }
 
-    fn check_topics(&self, roles: &[(&str, Role)]) -> Result<(), BagError> {
-        let bag = self;
+    /// Checks that the topics asked for are there, taking the odometry from `/tf` when the
+    /// odometry topic is missing and [`Topics::odom_from_tf`] allows it.
+    fn finish(&mut self, roles: &[(&str, Role)]) -> Result<(), BagError> {
+        let available = |bag: &Self| {
+            bag.topics
+                .iter()
+                .map(|(t, (ty, _))| format!("{t} ({ty})"))
+                .collect()
+        };
         for (topic, role) in roles {
-            if *role != Role::Tf && !bag.topics.contains_key(*topic) {
-                return Err(BagError::MissingTopic {
-                    topic: (*topic).into(),
-                    available: bag
-                        .topics
-                        .iter()
-                        .map(|(t, (ty, _))| format!("{t} ({ty})"))
-                        .collect(),
-                });
+            if matches!(role, Role::Tf | Role::TfOdom) || self.topics.contains_key(*topic) {
+                continue;
             }
+            if *role == Role::Odom {
+                if let Some(tf) = &self.odom_tf {
+                    if self.tf_odometry.is_empty() {
+                        return Err(BagError::NoOdometry {
+                            topic: (*topic).into(),
+                            tf: Box::new(tf.clone()),
+                            tf_pairs: self.tf_pairs.iter().cloned().collect(),
+                            available: available(self),
+                        });
+                    }
+                    self.odometry = std::mem::take(&mut self.tf_odometry);
+                    self.odometry_from_tf = true;
+                    continue;
+                }
+            }
+            return Err(BagError::MissingTopic {
+                topic: (*topic).into(),
+                available: available(self),
+            });
         }
+        self.tf_odometry = Vec::new();
+        self.tf_pairs.clear();
         Ok(())
     }
 
@@ -509,6 +738,33 @@ impl Bag {
                     Err(e) => self.skip(format!("{topic}: malformed ({e})")),
                 }
             }
+            Role::TfOdom => match decode_tf_stamped(data) {
+                Ok(transforms) => {
+                    let Some(tf) = self.odom_tf.clone() else {
+                        return;
+                    };
+                    let (odom, base) = (
+                        tf.odom_frame.trim_start_matches('/'),
+                        tf.base_frame.trim_start_matches('/'),
+                    );
+                    for m in transforms {
+                        let v = &m.value;
+                        if v.parent != odom || v.child != base {
+                            if self.tf_pairs.len() < MAX_TF_PAIRS_LISTED {
+                                self.tf_pairs.insert(format!("{} → {}", v.parent, v.child));
+                            }
+                            continue;
+                        }
+                        if in_order(m.stamp_ns, self) {
+                            self.tf_odometry.push(Stamped {
+                                stamp_ns: m.stamp_ns,
+                                value: v.pose,
+                            });
+                        }
+                    }
+                }
+                Err(e) => self.skip(format!("{topic}: malformed ({e})")),
+            },
             Role::Tf => match decode_tf(data) {
                 Ok(m) => self.mounts.extend(m),
                 Err(e) => self.skip(format!("{topic}: malformed ({e})")),
@@ -516,7 +772,49 @@ impl Bag {
         }
     }
 
-    /// `child`'s pose in `parent` from `/tf_static`, if recorded directly.
+    /// `child`'s pose in `parent` through any chain of `/tf_static` transforms, as tf2 finds
+    /// it: each frame has the parent of its last transform, and the pose is composed up from
+    /// `child` and from `parent` to their nearest common ancestor (a transform may be walked
+    /// backwards, inverted). The identity when the two frames are the same; `None` when they are
+    /// not connected (a loop in the transforms ends the walk). Metres and radians, in the plane.
+    pub fn frame_pose(&self, parent: &str, child: &str) -> Option<Pose2> {
+        let (p, c) = (
+            parent.trim_start_matches('/'),
+            child.trim_start_matches('/'),
+        );
+        // Each frame's parent and its pose there: the last transform wins, as in tf2.
+        let mut up: BTreeMap<&str, (&str, Pose2)> = BTreeMap::new();
+        for m in &self.mounts {
+            up.insert(m.child.as_str(), (m.parent.as_str(), m.pose));
+        }
+        // A frame's ancestors, with the frame's pose in each: [(frame, I), (its parent, …), …].
+        let chain = |f: &'_ str| {
+            let mut out = vec![(f.to_owned(), Pose2::default())];
+            let mut cur = f.to_owned();
+            let mut acc = Pose2::default();
+            while let Some(&(parent, pose)) = up.get(cur.as_str()) {
+                if out.iter().any(|(g, _)| g == parent) || out.len() > up.len() {
+                    break;
+                }
+                acc = compose(pose, acc);
+                out.push((parent.to_owned(), acc));
+                cur = parent.to_owned();
+            }
+            out
+        };
+        let (cp, cc) = (chain(p), chain(c));
+        cc.iter().find_map(|(a, a_child)| {
+            let (_, a_parent) = cp.iter().find(|(g, _)| g == a)?;
+            Some(if a == p {
+                *a_child
+            } else {
+                compose(inverse(*a_parent), *a_child)
+            })
+        })
+    }
+
+    /// `child`'s pose in `parent` from `/tf_static`, if recorded directly (one transform;
+    /// [`Bag::frame_pose`] follows chains).
     pub fn mount(&self, parent: &str, child: &str) -> Option<Pose2> {
         let (p, c) = (
             parent.trim_start_matches('/'),
@@ -527,6 +825,31 @@ impl Bag {
             .rev()
             .find(|m| m.parent == p && m.child == c)
             .map(|m| m.pose)
+    }
+}
+
+/// `b` (a pose in `a`'s frame) in the frame `a` is given in: `a ∘ b`. The heading is wrapped
+/// to (−π, π] only when the sum leaves it, so a composition with no rotation adds exactly.
+pub fn compose(a: Pose2, b: Pose2) -> Pose2 {
+    let (s, c) = a.theta.sin_cos();
+    let mut theta = a.theta + b.theta;
+    if !(-std::f64::consts::PI..=std::f64::consts::PI).contains(&theta) {
+        theta = theta.sin().atan2(theta.cos());
+    }
+    Pose2 {
+        x: a.x + c * b.x - s * b.y,
+        y: a.y + s * b.x + c * b.y,
+        theta,
+    }
+}
+
+/// The inverse of a pose: `compose(inverse(a), a)` is the identity (to rounding).
+pub fn inverse(a: Pose2) -> Pose2 {
+    let (s, c) = a.theta.sin_cos();
+    Pose2 {
+        x: -(c * a.x + s * a.y),
+        y: -(-s * a.x + c * a.y),
+        theta: -a.theta,
     }
 }
 
@@ -582,5 +905,75 @@ mod tests {
         assert_eq!(interpolate(&s, 20).unwrap(), s[1].value);
         assert_eq!(interpolate(&s, 5), None);
         assert_eq!(interpolate(&s, 25), None);
+    }
+
+    fn mount(parent: &str, child: &str, x: f64, y: f64, deg: f64) -> Mount {
+        Mount {
+            parent: parent.into(),
+            child: child.into(),
+            pose: Pose2 {
+                x,
+                y,
+                theta: deg.to_radians(),
+            },
+        }
+    }
+
+    fn close(a: Pose2, b: Pose2) -> bool {
+        (a.x - b.x).abs() < 1e-12 && (a.y - b.y).abs() < 1e-12 && (a.theta - b.theta).abs() < 1e-12
+    }
+
+    #[test]
+    fn frame_pose_follows_a_chain_in_any_order_and_direction() {
+        // base_footprint -> base_link: 1 m ahead, turned 90°; base_link -> laser: 0.5 m ahead
+        // of base_link, turned 90° more. By hand: the laser is 0.5 m along base_link's x, which
+        // is base_footprint's y, so at (1, 0.5) and turned 180°.
+        let bag = Bag {
+            mounts: vec![
+                mount("base_link", "laser", 0.5, 0.0, 90.0),
+                mount("base_link", "imu", 0.0, -2.0, 0.0),
+                mount("base_footprint", "base_link", 1.0, 0.0, 90.0),
+                mount("odom_x", "other", 1.0, 1.0, 0.0),
+            ],
+            ..Bag::default()
+        };
+        let want = Pose2 {
+            x: 1.0,
+            y: 0.5,
+            theta: std::f64::consts::PI,
+        };
+        let got = bag.frame_pose("base_footprint", "/laser").unwrap();
+        assert!(close(got, want), "{got:?}");
+        // Backwards: base_footprint in the laser's frame. By hand: from the laser at (1, 0.5)
+        // the origin is (−1, −0.5) away; the laser faces −x, so that is (1, 0.5) ahead-left.
+        let back = bag.frame_pose("laser", "base_footprint").unwrap();
+        assert!(close(compose(got, back), Pose2::default()), "{back:?}");
+        assert!(
+            (back.x - 1.0).abs() < 1e-12 && (back.y - 0.5).abs() < 1e-12,
+            "{back:?}"
+        );
+        // Through the common ancestor base_link: the imu is 2 m to base_link's right; the
+        // laser at (0.5, 0) turned 90°: the imu is at (−2, 0.5) in the laser's frame.
+        let imu = bag.frame_pose("laser", "imu").unwrap();
+        assert!(
+            (imu.x + 2.0).abs() < 1e-12 && (imu.y - 0.5).abs() < 1e-12,
+            "{imu:?}"
+        );
+        assert_eq!(bag.frame_pose("laser", "laser"), Some(Pose2::default()));
+        assert_eq!(bag.frame_pose("base_link", "other"), None);
+        assert_eq!(bag.frame_pose("base_link", "nowhere"), None);
+    }
+
+    #[test]
+    fn frame_pose_ends_at_a_loop() {
+        let bag = Bag {
+            mounts: vec![
+                mount("a", "b", 1.0, 0.0, 0.0),
+                mount("b", "a", 1.0, 0.0, 0.0),
+            ],
+            ..Bag::default()
+        };
+        assert_eq!(bag.frame_pose("a", "c"), None);
+        assert!(bag.frame_pose("a", "b").is_some());
     }
 }

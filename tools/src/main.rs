@@ -91,11 +91,22 @@ fn main() -> ExitCode {
             beamfield_tools::cmd::calibrate::run(&args),
             cli.json,
         ),
-        Command::Track(args) => finish(
-            "beamfield track",
-            beamfield_tools::cmd::track::run(&args),
-            cli.json,
-        ),
+        Command::Track(args) => {
+            let r = beamfield_tools::cmd::track::run(&args);
+            let lost = r.as_ref().ok().and_then(|t| t.lost_line());
+            let code = finish("beamfield track", r, cli.json);
+            match lost {
+                Some(line) if code == ExitCode::SUCCESS => {
+                    eprintln!("beamfield track: {line}");
+                    if args.bag.is_some() {
+                        ExitCode::from(beamfield_tools::cmd::track::EXIT_LOST)
+                    } else {
+                        code
+                    }
+                }
+                _ => code,
+            }
+        }
         Command::Fit(args) => finish(
             "beamfield fit",
             beamfield_tools::cmd::fit::run(&args),

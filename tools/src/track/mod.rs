@@ -166,5 +166,5 @@ pub mod wheels;
 
 pub use input::{field_bytes, load, load_with_max_range, TrackInput};
 pub use odometry::{odometry_sample, synthesize_odometry};
-pub use recorded::{load_bag, read_odometry_file, read_reference_file, BagSummary};
+pub use recorded::{load_bag, read_odometry_file, read_reference_file, BagSummary, ScanLayout};
 pub use run::{quality_name, run_once, Metrics, QualityTable, RunOptions, RunResult, ScanRecord};

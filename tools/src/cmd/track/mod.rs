@@ -7,19 +7,29 @@ pub use report::{SeedRun, TrackReport};
 
 use crate::cmd::likelihood::LikelihoodArgs;
 use crate::cmd::scored_log::MAX_BEAMS;
-use crate::input::bag::Topics;
+use crate::input::bag::{OdomFromTf, Topics};
 use crate::track::{
     field_bytes, load_bag, load_with_max_range, read_odometry_file, read_reference_file, run_once,
-    synthesize_odometry, usage, Init, Metrics, RunOptions, TrackError, Weighting, WheelPreset,
-    MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
+    synthesize_odometry, usage, Init, Metrics, RunOptions, ScanLayout, TrackError, Weighting,
+    WheelPreset, MAX_TRACK_PARTICLES, MAX_TRACK_SEEDS, WHEEL_SEED_XOR,
 };
 use beamfield::mcl::QualityThresholds;
 use clap::Args;
 use std::path::PathBuf;
 
+/// The exit code of a `track --bag` run that was lost (its largest error against the reference
+/// passed 0.5 m in at least one seed); the report is printed in full before it.
+pub const EXIT_LOST: u8 = 3;
+
 /// `beamfield track`: run the localizer over a log or a bag.
 #[derive(Args, Debug, Clone)]
 #[command(group(clap::ArgGroup::new("recording").required(true).args(["log", "bag"])))]
+#[command(
+    after_help = "Exit codes: 0 the runs ended (with --bag: none was lost); 1 an error \
+    (the line on stderr says which); 3 with --bag, the report is printed but at least one run \
+    was lost: its largest error against the reference topic passed 0.5 m (a line on stderr \
+    says so). A lost run with --log is reported on stderr too, with exit code 0."
+)]
 pub struct TrackArgs {
     /// The distance-field blob (`beamfield field build`; `--init global` and recovery need it
     /// built with `--free-space`), or a nav2 map YAML, turned into a blob with its free space.
@@ -41,21 +51,41 @@ pub struct TrackArgs {
     /// reference scans only.
     #[arg(long, value_name = "FILE", requires = "log")]
     pub reference: Option<PathBuf>,
-    /// A ROS 2 bag (an .mcap file or a rosbag2 directory): scans, odometry and a reference
-    /// pose by topic; the odometry is the bag's (needs --reference-topic).
+    /// A ROS 2 bag: an .mcap file, a .db3 file (sqlite3, Humble's default storage), or a
+    /// rosbag2 directory of either; scans, odometry and a reference pose by topic; the
+    /// odometry is the bag's (needs --reference-topic).
     #[arg(long, conflicts_with = "odometry")]
     pub bag: Option<PathBuf>,
     /// The bag's sensor_msgs/LaserScan topic.
     #[arg(long, default_value = "/scan", requires = "bag")]
     pub scan_topic: String,
-    /// The bag's nav_msgs/Odometry topic.
+    /// The bag's nav_msgs/Odometry topic. A bag without it takes its odometry from /tf: the
+    /// transforms ODOM_FRAME → BASE_FRAME.
     #[arg(long, default_value = "/odom", requires = "bag")]
     pub odom_topic: String,
+    /// Bin every scan onto this layout: the first beam's bearing and the step in degrees
+    /// (counter-clockwise in the laser's frame) and the beam count, e.g. "-180,1,360". Each
+    /// reading goes to the beam nearest to its bearing within half a step (the nearest of
+    /// several stays), as the device bins a LiDAR's revolution. Without it, scans whose angles
+    /// change from one to the next (an LD06 driver's) are binned onto the layout covering
+    /// them: the median first and last bearings at the largest step.
+    #[arg(
+        long,
+        value_name = "MIN_DEG,STEP_DEG,BEAMS",
+        allow_hyphen_values = true,
+        requires = "bag"
+    )]
+    pub scan_layout: Option<String>,
+    /// The odometry frame on /tf, for a bag with no odometry topic.
+    #[arg(long, default_value = "odom", requires = "bag")]
+    pub odom_frame: String,
     /// The bag's reference pose (PoseWithCovarianceStamped or PoseStamped: a recorded
     /// amcl_pose, ground truth) the errors are measured against.
     #[arg(long, requires = "bag")]
     pub reference_topic: Option<String>,
-    /// The robot's frame: the laser's mount is `/tf_static`'s BASE_FRAME → the scans' frame.
+    /// The robot's frame: the laser's mount is BASE_FRAME → the scans' frame, composed through
+    /// any chain of /tf_static transforms (e.g. base_footprint → base_link → laser); a scan
+    /// frame not connected to it is refused.
     #[arg(long, default_value = "base_link", requires = "bag")]
     pub base_frame: String,
     /// Recorded odometry for the log instead of synthesized: lines `index x y θ` (m, m, rad;
@@ -232,6 +262,40 @@ fn parse_list(text: &str, what: &str, n: usize) -> Result<Vec<f32>, TrackError> 
         k if k == n => Ok(v),
         _ => Err(usage(format!("{what} {text:?}: expected {n} numbers"))),
     }
+}
+
+/// `--scan-layout MIN_DEG,STEP_DEG,BEAMS`.
+fn scan_layout(text: &str) -> Result<ScanLayout, TrackError> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            usage(format!(
+                "--scan-layout {text:?}: expected numbers separated by commas"
+            ))
+        })?;
+    if v.len() != 3 {
+        return Err(usage(format!("--scan-layout {text:?}: expected 3 numbers")));
+    }
+    let beams = v[2];
+    let ok = v[0].is_finite()
+        && v[1].is_finite()
+        && v[1] > 0.0
+        && beams >= 1.0
+        && beams <= MAX_BEAMS as f64
+        && beams.fract() == 0.0
+        && v[1] * beams <= 360.0 + 1e-3;
+    if !ok {
+        return Err(usage(format!(
+            "--scan-layout {text:?}: a first bearing (degrees), a step (degrees, > 0) and 1 to {MAX_BEAMS} beams spanning at most 360°"
+        )));
+    }
+    Ok(ScanLayout {
+        angle_min_rad: v[0].to_radians(),
+        increment_rad: v[1].to_radians(),
+        beams: beams as usize,
+    })
 }
 
 /// The options of `args` for seed `seed`.
@@ -428,14 +492,27 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
                 scan: args.scan_topic.clone(),
                 odom: args.odom_topic.clone(),
                 reference: args.reference_topic.clone(),
+                odom_from_tf: Some(OdomFromTf {
+                    topic: "/tf".into(),
+                    odom_frame: args.odom_frame.clone(),
+                    base_frame: args.base_frame.clone(),
+                }),
                 ..Topics::default()
             };
-            let (input, summary) = load_bag(bytes, path, &topics, &args.base_frame, lk)?;
-            (
-                input,
-                Some(summary),
-                format!("recorded ({})", args.odom_topic),
-            )
+            let layout = match &args.scan_layout {
+                Some(text) => Some(scan_layout(text)?),
+                None => None,
+            };
+            let (input, summary) = load_bag(bytes, path, &topics, &args.base_frame, lk, layout)?;
+            let source = if summary.odometry_from_tf {
+                format!(
+                    "recorded (/tf: {} → {}; the bag has no {})",
+                    args.odom_frame, args.base_frame, args.odom_topic
+                )
+            } else {
+                format!("recorded ({})", args.odom_topic)
+            };
+            (input, Some(summary), source)
         }
         _ => return Err(usage("give one of --log and --bag")),
     };

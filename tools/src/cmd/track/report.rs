@@ -104,6 +104,34 @@ pub struct TrackReport {
     pub bag: Option<crate::track::BagSummary>,
 }
 
+impl TrackReport {
+    /// A line saying that runs were lost (their largest error against the reference passed
+    /// 0.5 m), and which seeds; `None` when none was.
+    pub fn lost_line(&self) -> Option<String> {
+        if self.lost_runs == 0 {
+            return None;
+        }
+        let seeds: Vec<String> = self
+            .runs
+            .iter()
+            .filter(|r| r.metrics.lost)
+            .map(|r| r.seed.to_string())
+            .collect();
+        Some(format!(
+            "LOST: {} of {} runs lost the robot (largest error over 0.5 m against the {}; {} {})",
+            self.lost_runs,
+            self.runs.len(),
+            if self.bag.is_some() {
+                "reference topic"
+            } else {
+                "logged poses"
+            },
+            if seeds.len() == 1 { "seed" } else { "seeds" },
+            seeds.join(", ")
+        ))
+    }
+}
+
 impl fmt::Display for TrackReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let o = &self.options;
@@ -180,7 +208,7 @@ impl fmt::Display for TrackReport {
         if let Some(b) = &self.bag {
             writeln!(
                 f,
-                "bag: {} scans used, {} beams from {:.2}° every {:.3}°, max range {} m; laser mount ({}, {}, {:.2}°){}",
+                "bag: {} scans used, {} beams from {:.2}° every {:.3}°, max range {} m; laser mount ({}, {}, {:.2}°) {}",
                 b.scans_used,
                 b.beams,
                 b.angle_min_rad.to_degrees(),
@@ -189,8 +217,19 @@ impl fmt::Display for TrackReport {
                 b.mount[0],
                 b.mount[1],
                 b.mount[2].to_degrees(),
-                if b.mount_from_tf { " from /tf_static" } else { " (centred: none in /tf_static)" }
+                if b.mount_from_tf {
+                    format!("of {} on {} from /tf_static", b.scan_frame, b.base_frame)
+                } else {
+                    format!("(the scans are in the base frame {})", b.base_frame)
+                }
             )?;
+            if b.rebinned > 0 {
+                writeln!(
+                    f,
+                    "bag: {} scans binned onto that layout (nearest beam within half a step)",
+                    b.rebinned
+                )?;
+            }
             for (why, n) in &b.skipped {
                 writeln!(f, "bag: skipped {n}: {why}")?;
             }
