@@ -359,10 +359,27 @@ mod tests {
         t.to_nanos().unwrap()
     }
 
-    /// Feeds estimates at 10 Hz: `device_us(k)` and `arrival(k)` (ns); returns the stamps
-    /// (None: refused) with their arrivals.
+    /// What both clocks do: a stamp for a device time that arrived at `arrival_ns`.
+    trait Stamps {
+        fn stamp_at(&mut self, device_us: u64, arrival_ns: u64) -> Result<Time, NoStamp>;
+    }
+
+    impl Stamps for HostClock {
+        fn stamp_at(&mut self, device_us: u64, arrival_ns: u64) -> Result<Time, NoStamp> {
+            self.stamp(device_us, arrival_ns)
+        }
+    }
+
+    impl Stamps for DeviceClock {
+        fn stamp_at(&mut self, device_us: u64, arrival_ns: u64) -> Result<Time, NoStamp> {
+            self.stamp(device_us, arrival_ns)
+        }
+    }
+
+    /// Feeds `n` estimates: `device_us(k)` and `arrival(k)` (ns); returns the stamps (None:
+    /// refused) with their arrivals.
     fn feed(
-        c: &mut HostClock,
+        c: &mut impl Stamps,
         n: u64,
         device_us: impl Fn(u64) -> u64,
         arrival: impl Fn(u64) -> u64,
@@ -370,7 +387,7 @@ mod tests {
         (0..n)
             .map(|k| {
                 let a = arrival(k);
-                (a, c.stamp(device_us(k), a).ok().map(ns))
+                (a, c.stamp_at(device_us(k), a).ok().map(ns))
             })
             .collect()
     }
@@ -501,21 +518,6 @@ mod tests {
         assert_eq!(c.stamp(u64::MAX, 5), Err(NoStamp::NonIncreasing));
     }
 
-    /// Feeds a [`DeviceClock`] like [`feed`].
-    fn feed_device(
-        c: &mut DeviceClock,
-        n: u64,
-        device_us: impl Fn(u64) -> u64,
-        arrival: impl Fn(u64) -> u64,
-    ) -> Vec<(u64, Option<u64>)> {
-        (0..n)
-            .map(|k| {
-                let a = arrival(k);
-                (a, c.stamp(device_us(k), a).ok().map(ns))
-            })
-            .collect()
-    }
-
     /// Stamps strictly increasing, and each step between two published stamps at most
     /// `max_step_ns` more than the computer's time between their arrivals.
     fn check_device(out: &[(u64, Option<u64>)], max_step_ns: u64) {
@@ -538,7 +540,7 @@ mod tests {
     #[test]
     fn device_stamps_are_the_device_time_once_three_agree() {
         let mut c = DeviceClock::new();
-        let out = feed_device(&mut c, 50, |k| 5_000_000 + k * 100_000, at_10hz);
+        let out = feed(&mut c, 50, |k| 5_000_000 + k * 100_000, at_10hz);
         // Two held while the start is confirmed, then the device's time as it is.
         assert_eq!(out[0].1, None);
         assert_eq!(out[1].1, None);
@@ -561,7 +563,7 @@ mod tests {
                 (k - 300) * 100_000
             }
         };
-        let out = feed_device(&mut c, 400, dev, at_10hz);
+        let out = feed(&mut c, 400, dev, at_10hz);
         check_device(&out, 0);
         assert_eq!(c.counters.restart, 1);
         assert_eq!(c.counters.jump_forward, 0);
@@ -582,7 +584,7 @@ mod tests {
         let mut c = DeviceClock::new();
         // The device's clock is set back 5 s at estimate 100, and goes on from there.
         let dev = |k: u64| 100_000_000 + k * 100_000 - if k >= 100 { 5_000_000 } else { 0 };
-        let out = feed_device(&mut c, 200, dev, at_10hz);
+        let out = feed(&mut c, 200, dev, at_10hz);
         check_device(&out, 0);
         assert_eq!(c.counters.restart, 1);
         assert_eq!(out.iter().filter(|o| o.1.is_none()).count(), 4);
@@ -594,7 +596,7 @@ mod tests {
         let mut c = DeviceClock::new();
         // An hour ahead from estimate 50 on.
         let dev = |k: u64| k * 100_000 + if k >= 50 { 3_600_000_000 } else { 0 };
-        let out = feed_device(&mut c, 120, dev, at_10hz);
+        let out = feed(&mut c, 120, dev, at_10hz);
         check_device(&out, 0);
         assert_eq!(c.counters.jump_forward, 1);
         assert_eq!(c.counters.restart, 0);
@@ -610,7 +612,7 @@ mod tests {
             40 => 0,
             _ => 1_000_000 + k * 100_000,
         };
-        let out = feed_device(&mut c, 60, dev, at_10hz);
+        let out = feed(&mut c, 60, dev, at_10hz);
         check_device(&out, 0);
         assert_eq!(out[20].1, None);
         assert_eq!(out[40].1, None);
@@ -625,7 +627,7 @@ mod tests {
         let mut c = DeviceClock::new();
         // The device and its clock pause for 14.6 s after estimate 100.
         let arrival = |k: u64| at_10hz(k) + if k > 100 { 14_600_000_000 } else { 0 };
-        let out = feed_device(&mut c, 200, |k| k * 100_000, arrival);
+        let out = feed(&mut c, 200, |k| k * 100_000, arrival);
         check_device(&out, 0);
         assert_eq!(
             c.counters,
