@@ -421,7 +421,7 @@ pub fn read_bag(b: &super::BagInput) -> Result<(Vec<LogScan>, Vec<Pose>)> {
             first.value.angle_increment.to_degrees()
         )));
     }
-    if let Some(m) = bag.mount("base_link", &first.value.frame_id) {
+    if let Some(m) = bag.frame_pose("base_link", &first.value.frame_id) {
         if m.x.abs() > 1e-6 || m.y.abs() > 1e-6 || m.theta.abs() > 1e-6 {
             return Err(Error::Requirement(format!(
                 "--bag: the laser is mounted at ({}, {}, {} rad) on base_link; the firmware's layout has it at the centre",
