@@ -161,6 +161,11 @@ fn odometry_from_tf_tracks_as_the_odometry_topic() {
         v["odometry"],
         "recorded (/tf: odom → base_footprint; the bag has no /wheel_odom)"
     );
+    // Said on stderr too (a mistyped topic name lands here).
+    assert!(
+        err.contains("the bag has no /wheel_odom topic: odometry from /tf (odom → base_footprint)"),
+        "{err}"
+    );
     // No odometry anywhere: the line names what /tf has.
     let (code, _, err) = track(
         &data().join("intel-bag-chain"),

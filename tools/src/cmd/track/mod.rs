@@ -505,6 +505,11 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport, TrackError> {
             };
             let (input, summary) = load_bag(bytes, path, &topics, &args.base_frame, lk, layout)?;
             let source = if summary.odometry_from_tf {
+                // Said where a user sees it even with --json: a mistyped --odom-topic lands here.
+                eprintln!(
+                    "beamfield track: the bag has no {} topic: odometry from /tf ({} → {})",
+                    args.odom_topic, args.odom_frame, args.base_frame
+                );
                 format!(
                     "recorded (/tf: {} → {}; the bag has no {})",
                     args.odom_frame, args.base_frame, args.odom_topic
