@@ -267,9 +267,11 @@ fn flatten(prefix: &str, m: &serde_yaml::Mapping, out: &mut BTreeMap<String, Val
     }
 }
 
-/// nav2's `alpha1..4` above this are sent with a warning in the report: measured on the Intel
-/// log with the device's sensor model, α 0.2 (nav2's default) is lost in 4 to 10 runs of 10 where
-/// α 0.005 is lost in none.
+/// nav2's `alpha1..4` above this are sent with a warning in the report: with the device's sensor
+/// model at its defaults (κ 64) α 0.2 (nav2's default) tracks a robot whose updates come at
+/// 10 Hz, but the noise grows with the step between updates, and with steps of about 0.7 m
+/// (updates gated by distance, or a slow scan rate) the robot is lost (docs/nav2.md, the
+/// parameter table).
 pub const ALPHA_WARN: f64 = 0.05;
 
 fn number(name: &str, v: &Value) -> Result<f64, ParamsError> {
@@ -415,12 +417,12 @@ impl Nav2Params {
                     sp.odom_alpha[i] = Some(a as f32);
                     any_sp = true;
                     // Sent as given, with a warning: nav2's values suit AMCL's broad sensor
-                    // model, not the device's sharp one (docs/localization.md, "nav2's stock
-                    // parameters").
+                    // model; with the device's sharper one they hold only for short steps
+                    // between updates (docs/nav2.md, the parameter table).
                     let note = if a > ALPHA_WARN {
                         format!(
                             " (above {ALPHA_WARN}: with the device's sensor model (σ_hit 5 cm) \
-                             the robot is lost more often than at 0.005-0.01, docs/localization.md)"
+                             the robot is lost when updates are far apart (0.7 m), docs/nav2.md)"
                         )
                     } else {
                         String::new()
